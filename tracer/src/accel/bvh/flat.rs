@@ -1,0 +1,117 @@
+//! The tree in one contiguous array: 32-byte nodes, spheres copied into leaf order.
+
+use super::builder::{self, FlatNode};
+use super::params::{BvhParams, Traversal};
+use super::stats::TreeStats;
+use super::traverse::{ChildOrder, Fixed, FrontToBack, TreeView, traverse};
+use crate::accel::{Accelerator, Hit};
+use crate::counters::Counters;
+use crate::geometry::{Aabb, Ray, Sphere};
+
+/// A BVH stored as one array of [`FlatNode`]s (sibling pairs, depth-first) with spheres in leaf order.
+#[derive(Clone, Debug)]
+pub struct FlatBvh {
+    nodes: Vec<FlatNode>,
+    spheres: Vec<Sphere>,
+    prim_ids: Vec<u32>,
+    params: BvhParams,
+}
+
+impl FlatBvh {
+    /// Builds the tree and lays it out.
+    pub fn build(spheres: &[Sphere], params: &BvhParams) -> Self {
+        let built = builder::build(spheres, params);
+        let ordered = built.prim_order.iter().map(|&p| spheres[p as usize]).collect();
+        Self { nodes: built.nodes, spheres: ordered, prim_ids: built.prim_order, params: *params }
+    }
+
+    /// The parameters it was built with.
+    pub fn params(&self) -> &BvhParams {
+        &self.params
+    }
+
+    /// The nodes; the root is first.
+    pub fn nodes(&self) -> &[FlatNode] {
+        &self.nodes
+    }
+
+    #[inline(always)]
+    fn closest<O: ChildOrder, C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
+        let mut best = u32::MAX;
+        let mut best_t = ray.t_max;
+        traverse::<_, O, C, _>(self, ray, counters, |node, t_max, counters| {
+            let n = &self.nodes[node as usize];
+            for i in n.first..n.first + n.prim_count {
+                counters.prim_test();
+                if let Some(t) = self.spheres[i as usize].intersect(ray, *t_max) {
+                    *t_max = t;
+                    best_t = t;
+                    best = i;
+                }
+            }
+            false
+        });
+        (best != u32::MAX).then(|| Hit { t: best_t, prim: self.prim_ids[best as usize] })
+    }
+
+    #[inline(always)]
+    fn any<O: ChildOrder, C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
+        let mut found = false;
+        traverse::<_, O, C, _>(self, ray, counters, |node, t_max, counters| {
+            let n = &self.nodes[node as usize];
+            found = self.spheres[n.first as usize..(n.first + n.prim_count) as usize].iter().any(|s| {
+                counters.prim_test();
+                s.intersect(ray, *t_max).is_some()
+            });
+            found
+        });
+        found
+    }
+}
+
+impl TreeView for FlatBvh {
+    type Node<'a> = u32;
+
+    #[inline(always)]
+    fn root(&self) -> u32 {
+        0
+    }
+
+    #[inline(always)]
+    fn bounds(&self, node: u32) -> &Aabb {
+        &self.nodes[node as usize].bounds
+    }
+
+    #[inline(always)]
+    fn children(&self, node: u32) -> Option<[u32; 2]> {
+        let n = &self.nodes[node as usize];
+        (!n.is_leaf()).then(|| [n.first, n.first + 1])
+    }
+
+    fn leaf_len(&self, node: u32) -> usize {
+        self.nodes[node as usize].prim_count as usize
+    }
+}
+
+impl Accelerator for FlatBvh {
+    fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
+        match self.params.traversal {
+            Traversal::Fixed => self.closest::<Fixed, C>(ray, counters),
+            Traversal::FrontToBack => self.closest::<FrontToBack, C>(ray, counters),
+        }
+    }
+
+    fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
+        match self.params.traversal {
+            Traversal::Fixed => self.any::<Fixed, C>(ray, counters),
+            Traversal::FrontToBack => self.any::<FrontToBack, C>(ray, counters),
+        }
+    }
+
+    fn stats(&self) -> TreeStats {
+        let bytes = std::mem::size_of_val(self.nodes.as_slice())
+            + std::mem::size_of_val(self.spheres.as_slice())
+            + std::mem::size_of_val(self.prim_ids.as_slice());
+        TreeStats::of_tree(self, bytes)
+    }
+}

@@ -1,0 +1,20 @@
+//! Bounding volume hierarchies: one builder, two layouts, one generic traversal.
+//!
+//! - [`params`]: what a user chooses (leaf size, split rule, traversal order).
+//! - [`builder`]: the shared top-down builder; [`split`] holds one file per split rule, [`sah`] the cost model.
+//! - [`traverse`]: closest-hit/any-hit traversal, generic over tree layout, child order, counters and leaves.
+//! - [`Bvh`] (pointer tree, the paper's) and [`FlatBvh`] (one array) are the layouts.
+
+pub mod builder;
+pub mod flat;
+pub mod params;
+pub mod pointer;
+pub mod sah;
+pub mod split;
+pub mod stats;
+pub mod traverse;
+
+pub use flat::FlatBvh;
+pub use params::{BvhParams, ParamError, Split, Traversal};
+pub use pointer::Bvh;
+pub use stats::TreeStats;

@@ -1,0 +1,169 @@
+//! The paper's tree: boxed nodes linked by pointers, leaves holding lists of sphere indices.
+
+use super::builder::{self, BuiltTree};
+use super::params::{BvhParams, Traversal};
+use super::stats::TreeStats;
+use super::traverse::{ChildOrder, Fixed, FrontToBack, TreeView, traverse};
+use crate::accel::{Accelerator, Hit};
+use crate::counters::Counters;
+use crate::geometry::{Aabb, Ray, Sphere};
+
+/// A node of the pointer tree.
+#[derive(Clone, Debug)]
+pub struct BvhNode {
+    /// Bounds of everything below.
+    pub bounds: Aabb,
+    /// Children or primitives.
+    pub kind: BvhNodeKind,
+}
+
+/// What a pointer-tree node holds.
+#[derive(Clone, Debug)]
+pub enum BvhNodeKind {
+    /// Two boxed children.
+    Interior {
+        /// First child.
+        left: Box<BvhNode>,
+        /// Second child.
+        right: Box<BvhNode>,
+    },
+    /// Indices of the spheres in the leaf.
+    Leaf {
+        /// Sphere indices into the scene's sphere list.
+        prims: Vec<u32>,
+    },
+}
+
+/// A BVH of boxed nodes over the spheres in scene order (the paper's layout).
+#[derive(Clone, Debug)]
+pub struct Bvh {
+    root: BvhNode,
+    spheres: Vec<Sphere>,
+    params: BvhParams,
+}
+
+fn boxed(tree: &BuiltTree, index: usize) -> BvhNode {
+    let n = &tree.nodes[index];
+    let kind = if n.is_leaf() {
+        let range = n.first as usize..(n.first + n.prim_count) as usize;
+        BvhNodeKind::Leaf { prims: tree.prim_order[range].to_vec() }
+    } else {
+        BvhNodeKind::Interior {
+            left: Box::new(boxed(tree, n.first as usize)),
+            right: Box::new(boxed(tree, n.first as usize + 1)),
+        }
+    };
+    BvhNode { bounds: n.bounds, kind }
+}
+
+impl Bvh {
+    /// Builds the tree and boxes its nodes.
+    pub fn build(spheres: &[Sphere], params: &BvhParams) -> Self {
+        let built = builder::build(spheres, params);
+        Self { root: boxed(&built, 0), spheres: spheres.to_vec(), params: *params }
+    }
+
+    /// The parameters it was built with.
+    pub fn params(&self) -> &BvhParams {
+        &self.params
+    }
+
+    /// The root node.
+    pub fn root(&self) -> &BvhNode {
+        &self.root
+    }
+
+    #[inline(always)]
+    fn closest<O: ChildOrder, C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        traverse::<_, O, C, _>(self, ray, counters, |node: &BvhNode, t_max, counters| {
+            if let BvhNodeKind::Leaf { prims } = &node.kind {
+                for &p in prims {
+                    counters.prim_test();
+                    if let Some(t) = self.spheres[p as usize].intersect(ray, *t_max) {
+                        *t_max = t;
+                        best = Some(Hit { t, prim: p });
+                    }
+                }
+            }
+            false
+        });
+        best
+    }
+
+    #[inline(always)]
+    fn any<O: ChildOrder, C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
+        let mut found = false;
+        traverse::<_, O, C, _>(self, ray, counters, |node: &BvhNode, t_max, counters| {
+            if let BvhNodeKind::Leaf { prims } = &node.kind {
+                found = prims.iter().any(|&p| {
+                    counters.prim_test();
+                    self.spheres[p as usize].intersect(ray, *t_max).is_some()
+                });
+            }
+            found
+        });
+        found
+    }
+
+    fn heap_bytes(node: &BvhNode) -> usize {
+        match &node.kind {
+            BvhNodeKind::Interior { left, right } => {
+                2 * std::mem::size_of::<BvhNode>() + Self::heap_bytes(left) + Self::heap_bytes(right)
+            }
+            BvhNodeKind::Leaf { prims } => prims.capacity() * std::mem::size_of::<u32>(),
+        }
+    }
+}
+
+impl TreeView for Bvh {
+    type Node<'a> = &'a BvhNode;
+
+    #[inline(always)]
+    fn root(&self) -> &BvhNode {
+        &self.root
+    }
+
+    #[inline(always)]
+    fn bounds<'a>(&'a self, node: &'a BvhNode) -> &'a Aabb {
+        &node.bounds
+    }
+
+    #[inline(always)]
+    fn children<'a>(&'a self, node: &'a BvhNode) -> Option<[&'a BvhNode; 2]> {
+        match &node.kind {
+            BvhNodeKind::Interior { left, right } => Some([left, right]),
+            BvhNodeKind::Leaf { .. } => None,
+        }
+    }
+
+    fn leaf_len(&self, node: &BvhNode) -> usize {
+        match &node.kind {
+            BvhNodeKind::Leaf { prims } => prims.len(),
+            BvhNodeKind::Interior { .. } => 0,
+        }
+    }
+}
+
+impl Accelerator for Bvh {
+    fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
+        match self.params.traversal {
+            Traversal::Fixed => self.closest::<Fixed, C>(ray, counters),
+            Traversal::FrontToBack => self.closest::<FrontToBack, C>(ray, counters),
+        }
+    }
+
+    fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
+        match self.params.traversal {
+            Traversal::Fixed => self.any::<Fixed, C>(ray, counters),
+            Traversal::FrontToBack => self.any::<FrontToBack, C>(ray, counters),
+        }
+    }
+
+    fn stats(&self) -> TreeStats {
+        let bytes = std::mem::size_of::<Self>()
+            + Self::heap_bytes(&self.root)
+            + std::mem::size_of_val(self.spheres.as_slice());
+        TreeStats::of_tree(self, bytes)
+    }
+}

@@ -1,0 +1,124 @@
+//! Acceleration structures behind one small trait: closest hit and any hit (occlusion).
+//!
+//! [`List`] is the brute-force reference; [`Bvh`] is the paper's pointer tree; [`FlatBvh`] is the same
+//! tree in one array. [`AccelParams`] chooses and parameterizes one at run time, [`BuiltAccel`] holds it,
+//! and an [`AccelVisitor`] reaches the concrete type so that hot loops stay monomorphic.
+
+pub mod bvh;
+mod list;
+
+use serde::{Deserialize, Serialize};
+
+use crate::counters::Counters;
+use crate::geometry::{Ray, Sphere};
+
+pub use bvh::{Bvh, BvhParams, FlatBvh, Split, Traversal, TreeStats};
+pub use list::List;
+
+/// The closest intersection found: distance along the ray and the sphere's index in the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// Index of the sphere in the scene's sphere list.
+    pub prim: u32,
+}
+
+/// A structure that answers ray queries over the spheres it was built from.
+pub trait Accelerator: Send + Sync {
+    /// The nearest hit in `(ray.t_min, ray.t_max)`, if any.
+    fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit>;
+    /// True when any sphere is hit in `(ray.t_min, ray.t_max)`.
+    fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool;
+    /// Size and quality of the built structure.
+    fn stats(&self) -> TreeStats;
+}
+
+/// Which acceleration structure to build.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum AccelKind {
+    /// Brute force over every sphere.
+    List,
+    /// The paper's pointer-based tree of boxed nodes.
+    Bvh,
+    /// The same tree in one contiguous array.
+    FlatBvh,
+}
+
+impl AccelKind {
+    /// Every kind, in the order tools list them.
+    pub const ALL: [AccelKind; 3] = [AccelKind::List, AccelKind::Bvh, AccelKind::FlatBvh];
+
+    /// The kebab-case name used in configs and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            AccelKind::List => "list",
+            AccelKind::Bvh => "bvh",
+            AccelKind::FlatBvh => "flat-bvh",
+        }
+    }
+}
+
+/// Everything that selects and shapes one accelerator (tree parameters are ignored by `List`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+pub struct AccelParams {
+    /// The structure.
+    pub kind: AccelKind,
+    /// Tree parameters for `Bvh` and `FlatBvh`.
+    pub bvh: BvhParams,
+}
+
+impl Default for AccelKind {
+    fn default() -> Self {
+        AccelKind::FlatBvh
+    }
+}
+
+/// A built accelerator of any kind.
+#[derive(Debug)]
+pub enum BuiltAccel {
+    /// See [`List`].
+    List(List),
+    /// See [`Bvh`].
+    Bvh(Bvh),
+    /// See [`FlatBvh`].
+    FlatBvh(FlatBvh),
+}
+
+/// Code run with the concrete accelerator type, so that its loops are compiled for that type.
+pub trait AccelVisitor {
+    /// What the visit returns.
+    type Output;
+    /// Runs with the concrete accelerator.
+    fn visit<A: Accelerator>(self, accel: &A) -> Self::Output;
+}
+
+impl BuiltAccel {
+    /// Builds the structure `params` names over `spheres` (the tree parameters must be valid).
+    pub fn build(spheres: &[Sphere], params: &AccelParams) -> Self {
+        match params.kind {
+            AccelKind::List => BuiltAccel::List(List::build(spheres)),
+            AccelKind::Bvh => BuiltAccel::Bvh(Bvh::build(spheres, &params.bvh)),
+            AccelKind::FlatBvh => BuiltAccel::FlatBvh(FlatBvh::build(spheres, &params.bvh)),
+        }
+    }
+
+    /// Calls `visitor` with the concrete structure.
+    pub fn visit<V: AccelVisitor>(&self, visitor: V) -> V::Output {
+        match self {
+            BuiltAccel::List(a) => visitor.visit(a),
+            BuiltAccel::Bvh(a) => visitor.visit(a),
+            BuiltAccel::FlatBvh(a) => visitor.visit(a),
+        }
+    }
+
+    /// Size and quality of the built structure.
+    pub fn stats(&self) -> TreeStats {
+        match self {
+            BuiltAccel::List(a) => a.stats(),
+            BuiltAccel::Bvh(a) => a.stats(),
+            BuiltAccel::FlatBvh(a) => a.stats(),
+        }
+    }
+}

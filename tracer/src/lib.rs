@@ -1,0 +1,20 @@
+//! The ray tracer under study: the seed paper's sphere tracer with a parameterized BVH.
+//!
+//! Data flows scene → accelerator → executor → renderer:
+//! - [`scene`] makes deterministic scenes from a seed (or parses a sphere file);
+//! - [`accel`] builds an acceleration structure ([`accel::List`], [`accel::Bvh`], [`accel::FlatBvh`]);
+//! - [`executor`] runs rows of an image under a parallel [`executor::Strategy`];
+//! - [`render`] shades full Whitted images or runs the primary-ray kernel.
+//!
+//! The crate does no file or terminal I/O; [`render::Image::write_png`] encodes into any writer.
+
+pub mod accel;
+pub mod counters;
+pub mod executor;
+pub mod fingerprint;
+pub mod geometry;
+pub mod render;
+pub mod rng;
+pub mod scene;
+
+pub use glam::Vec3;
