@@ -1,0 +1,110 @@
+//! Command-line arguments.
+
+use std::path::PathBuf;
+
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+use clap::{Args, Parser, Subcommand};
+use tracer::accel::{AccelKind, Split, Traversal};
+use tracer::executor::StrategyKind;
+use tracer::scene::SceneKind;
+
+/// bvhlab's harness: render, and (next) run and report BVH experiments.
+#[derive(Parser, Debug)]
+#[command(version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render one image of a scene with one accelerator and strategy, and print timings and statistics.
+    Render(RenderArgs),
+    /// List scenes, accelerators, splits, traversal orders and strategies.
+    List,
+}
+
+/// A parser accepting exactly the kebab-case names of `all` (plus `aliases`), listed in `--help`.
+fn choice<T: Copy + Send + Sync + 'static>(
+    all: &'static [T],
+    name: fn(T) -> &'static str,
+    aliases: &'static [(&'static str, &'static str)],
+) -> impl TypedValueParser<Value = T> {
+    let values = all.iter().map(move |&t| {
+        let n = name(t);
+        aliases.iter().filter(|a| a.1 == n).fold(PossibleValue::new(n), |v, a| v.alias(a.0))
+    });
+    PossibleValuesParser::new(values).map(move |s| {
+        let canonical = aliases.iter().find(|a| a.0 == s).map_or(s.as_str(), |a| a.1);
+        *all.iter().find(|&&t| name(t) == canonical).expect("clap checked the value")
+    })
+}
+
+/// Where the spheres come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SceneChoice {
+    Generated(SceneKind),
+    SphereFile,
+}
+
+const SCENE_CHOICES: [SceneChoice; 3] =
+    [SceneChoice::Generated(SceneKind::RandomSpheres), SceneChoice::Generated(SceneKind::ClusteredSpheres), SceneChoice::SphereFile];
+
+fn scene_name(s: SceneChoice) -> &'static str {
+    match s {
+        SceneChoice::Generated(k) => k.name(),
+        SceneChoice::SphereFile => "sphere-file",
+    }
+}
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// Scene generator, or `sphere-file` to read `--file`.
+    #[arg(long, default_value = "random-spheres", value_parser = choice(&SCENE_CHOICES, scene_name, &[]))]
+    pub scene: SceneChoice,
+    /// Sphere CSV for `--scene sphere-file` (format: see the tracer's `scene::sphere_file` docs).
+    #[arg(long)]
+    pub file: Option<PathBuf>,
+    /// Number of spheres of a generated scene.
+    #[arg(long, default_value_t = 1000)]
+    pub objects: usize,
+    /// Seed of a generated scene.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Acceleration structure.
+    #[arg(long, default_value = "flat-bvh", value_parser = choice(&AccelKind::ALL, AccelKind::name, &[]))]
+    pub accel: AccelKind,
+    /// BVH split rule (`sah` means `binned-sah`).
+    #[arg(long, default_value = "centroid-midpoint", value_parser = choice(&Split::ALL, Split::name, &[("sah", "binned-sah")]))]
+    pub split: Split,
+    /// Largest leaf, 1..=16.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=16))]
+    pub leaf_size: u32,
+    /// Bins per axis for binned SAH, 2..=256.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=256))]
+    pub sah_bins: u32,
+    /// Child visiting order.
+    #[arg(long, default_value = "fixed", value_parser = choice(&Traversal::ALL, Traversal::name, &[]))]
+    pub traversal: Traversal,
+    /// Parallel strategy.
+    #[arg(long, default_value = "rayon-bands", value_parser = choice(&StrategyKind::ALL, StrategyKind::name, &[]))]
+    pub strategy: StrategyKind,
+    /// Worker threads (default: all logical cores).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub threads: Option<u32>,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 640, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 480, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub height: u32,
+    /// Reflection bounces.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=64))]
+    pub max_depth: u32,
+    /// Also trace a separate counted pass and print work per ray.
+    #[arg(long)]
+    pub count: bool,
+    /// Where to write the PNG.
+    #[arg(long, default_value = "image.png")]
+    pub out: PathBuf,
+}
