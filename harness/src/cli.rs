@@ -8,7 +8,7 @@ use tracer::accel::{AccelKind, Split, Traversal};
 use tracer::executor::StrategyKind;
 use tracer::scene::SceneKind;
 
-/// bvhlab's harness: render, and (next) run and report BVH experiments.
+/// bvhlab's harness: run BVH experiments from TOML configs, report them, and render single images.
 #[derive(Parser, Debug)]
 #[command(version, about)]
 pub struct Cli {
@@ -18,10 +18,59 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 pub enum Command {
+    /// Run an experiment config: plan the sweep, time every run, record rows, write summaries, figures and REPORT.md.
+    Run(RunArgs),
+    /// Rebuild summaries, figures and REPORT.md of a run folder from its recorded rows alone.
+    Report(ReportArgs),
+    /// Parse and plan a config without running it; print the number of runs and a time estimate.
+    Validate(ValidateArgs),
     /// Render one image of a scene with one accelerator and strategy, and print timings and statistics.
     Render(RenderArgs),
     /// List scenes, accelerators, splits, traversal orders and strategies.
     List,
+}
+
+#[derive(Args, Debug)]
+pub struct RunArgs {
+    /// Experiment config (TOML).
+    pub config: PathBuf,
+    /// Output folder (default: results/<name>/, or results/<name>-quick/ with --quick).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Apply the config's [quick] overrides (a short version of the same experiment).
+    #[arg(long)]
+    pub quick: bool,
+    /// Continue a killed sweep: skip runs already recorded in the output folder.
+    #[arg(long)]
+    pub resume: bool,
+    /// Run only configurations I of N (1-based), e.g. 2/4, to spread a sweep over machines.
+    #[arg(long, value_parser = parse_shard)]
+    pub shard: Option<(usize, usize)>,
+    /// Exit with code 1 when a claim of the config fails.
+    #[arg(long)]
+    pub check_claims: bool,
+}
+
+fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let bad = || format!("{s:?} is not a shard (allowed: I/N with 1 <= I <= N, e.g. 2/4)");
+    let (i, n) = s.split_once('/').ok_or_else(bad)?;
+    let (i, n): (usize, usize) = (i.parse().map_err(|_| bad())?, n.parse().map_err(|_| bad())?);
+    if i >= 1 && i <= n { Ok((i, n)) } else { Err(bad()) }
+}
+
+#[derive(Args, Debug)]
+pub struct ReportArgs {
+    /// A run folder (holding runs.csv and experiment.toml).
+    pub dir: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub struct ValidateArgs {
+    /// Experiment config (TOML).
+    pub config: PathBuf,
+    /// Validate the [quick] version.
+    #[arg(long)]
+    pub quick: bool,
 }
 
 /// A parser accepting exactly the kebab-case names of `all` (plus `aliases`), listed in `--help`.

@@ -1,19 +1,34 @@
-//! `harness`: the bvhlab command line. Renders images now; runs experiment sweeps (issue 3) next.
+//! `harness`: the bvhlab command line. The data's trip: config → plan → run → rows → report.
 
 mod cli;
+mod config;
 mod error;
 mod list;
+mod output;
+mod plan;
 mod render;
+mod rows;
+mod run;
 
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::Parser;
+use report::spec::Verdict;
+
+use cli::{Command, ReportArgs, RunArgs, ValidateArgs};
+use config::Experiment;
+use error::Error;
+use plan::Plan;
 
 fn main() -> ExitCode {
     let cli = cli::Cli::parse();
     let result = match cli.command {
-        cli::Command::Render(args) => render::run(&args),
-        cli::Command::List => {
+        Command::Run(args) => run_command(&args),
+        Command::Report(args) => report_command(&args),
+        Command::Validate(args) => validate_command(&args),
+        Command::Render(args) => render::run(&args),
+        Command::List => {
             list::run();
             Ok(())
         }
@@ -25,4 +40,72 @@ fn main() -> ExitCode {
             ExitCode::from(e.exit_code())
         }
     }
+}
+
+fn load(path: &Path, quick: bool) -> Result<Experiment, Error> {
+    let exp = Experiment::load(path)?;
+    Ok(if quick { exp.quick() } else { exp })
+}
+
+/// Writes the report of `dir` and prints its claims; returns whether any claim failed.
+fn write_report(dir: &Path, exp: &Experiment, notes: Vec<String>) -> Result<bool, Error> {
+    let outcome = report::write(dir, &exp.report_spec(notes)).map_err(|e| Error::Run(e.to_string()))?;
+    for c in &outcome.claims {
+        let verdict = match c.verdict {
+            Verdict::Holds => "holds",
+            Verdict::Fails => "FAILS",
+            Verdict::Inconclusive => "inconclusive",
+        };
+        println!("claim {verdict:<12} ratio {:.3} [{:.3}, {:.3}] vs {:.3}: {}", c.ratio, c.lo, c.hi, c.threshold, c.text);
+    }
+    println!("report: {}", dir.join("REPORT.md").display());
+    Ok(outcome.claims.iter().any(|c| c.verdict == Verdict::Fails))
+}
+
+fn run_command(args: &RunArgs) -> Result<(), Error> {
+    let exp = load(&args.config, args.quick)?;
+    let mut plan = Plan::new(&exp, render::available_threads())?;
+    let mut dir = args.out.clone().unwrap_or_else(|| {
+        PathBuf::from("results").join(if args.quick { format!("{}-quick", exp.name) } else { exp.name.clone() })
+    });
+    if let Some((i, n)) = args.shard {
+        plan.runs.retain(|r| r.config % n == i - 1);
+        if args.out.is_none() {
+            dir = dir.join(format!("shard-{i}-of-{n}"));
+        }
+    }
+    run::sweep(&exp, &plan, &dir, args.resume)?;
+    let failed = write_report(&dir, &exp, plan.notes.clone())?;
+    if failed && args.check_claims {
+        return Err(Error::Run("a claim failed (see the claims above and REPORT.md)".into()));
+    }
+    Ok(())
+}
+
+fn report_command(args: &ReportArgs) -> Result<(), Error> {
+    let path = args.dir.join(run::CONFIG_COPY);
+    if !args.dir.join(run::RUNS_CSV).is_file() {
+        return Err(Error::Input(format!("{}: no {} here (not a run folder)", args.dir.display(), run::RUNS_CSV)));
+    }
+    let exp = Experiment::load(&path)?;
+    write_report(&args.dir, &exp, vec![]).map(|_| ())
+}
+
+fn validate_command(args: &ValidateArgs) -> Result<(), Error> {
+    let exp = load(&args.config, args.quick)?;
+    let cores = render::available_threads();
+    let plan = Plan::new(&exp, cores)?;
+    let seconds: f64 = plan.runs.iter().map(|r| plan::estimate_seconds(&plan.configurations[r.config].settings, cores)).sum();
+    let series: Vec<String> = exp.series.iter().map(|s| {
+        let n = plan.configurations.iter().filter(|c| c.series == s.label).count();
+        format!("{} ({n})", s.label)
+    }).collect();
+    println!("{}: ok", exp.path.display());
+    println!("configurations {} ({})", plan.configurations.len(), series.join(", "));
+    println!("runs           {} recorded ({} repetitions each) + {} warm-ups, order {}", plan.recorded_runs(), exp.repetitions, plan.runs.len() - plan.recorded_runs(), format!("{:?}", exp.order).to_lowercase());
+    println!("estimate       ~{:.0} s on {cores} cores (rough cost model, within about 2x)", seconds);
+    for n in &plan.notes {
+        println!("note           {n}");
+    }
+    Ok(())
 }

@@ -1,0 +1,224 @@
+//! The slice of the Embree 4 C ABI this binding uses: handles, enums, structs and function-pointer types.
+//!
+//! Facts from Embree v4.4.0's `include/embree4/*.h` (see /work/shared/embree4-abi.md); every struct size and
+//! alignment is pinned by a compile-time assert below.
+#![allow(non_snake_case, non_camel_case_types, dead_code)]
+
+use std::ffi::{c_char, c_int, c_uint, c_void};
+
+/// Opaque `RTCDevice` handle.
+pub type RTCDevice = *mut c_void;
+/// Opaque `RTCScene` handle.
+pub type RTCScene = *mut c_void;
+/// Opaque `RTCGeometry` handle.
+pub type RTCGeometry = *mut c_void;
+
+/// `RTC_INVALID_GEOMETRY_ID`.
+pub const RTC_INVALID_GEOMETRY_ID: u32 = u32::MAX;
+
+/// `RTCError::RTC_ERROR_NONE`.
+pub const RTC_ERROR_NONE: u32 = 0;
+
+/// `RTCDeviceProperty::RTC_DEVICE_PROPERTY_VERSION` (e.g. 40400 for 4.4.0).
+pub const RTC_DEVICE_PROPERTY_VERSION: u32 = 0;
+/// `RTCDeviceProperty::RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED`.
+pub const RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED: u32 = 32;
+/// `RTCDeviceProperty::RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED`.
+pub const RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED: u32 = 33;
+/// `RTCDeviceProperty::RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED`.
+pub const RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED: u32 = 34;
+/// `RTCDeviceProperty::RTC_DEVICE_PROPERTY_TASKING_SYSTEM` (0 internal, 1 TBB, 2 PPL).
+pub const RTC_DEVICE_PROPERTY_TASKING_SYSTEM: u32 = 128;
+
+/// `RTCBuildQuality::RTC_BUILD_QUALITY_LOW`.
+pub const RTC_BUILD_QUALITY_LOW: u32 = 0;
+/// `RTCBuildQuality::RTC_BUILD_QUALITY_MEDIUM` (the default).
+pub const RTC_BUILD_QUALITY_MEDIUM: u32 = 1;
+/// `RTCBuildQuality::RTC_BUILD_QUALITY_HIGH`.
+pub const RTC_BUILD_QUALITY_HIGH: u32 = 2;
+
+/// `RTCSceneFlags::RTC_SCENE_FLAG_NONE`.
+pub const RTC_SCENE_FLAG_NONE: u32 = 0;
+/// `RTCSceneFlags::RTC_SCENE_FLAG_ROBUST`.
+pub const RTC_SCENE_FLAG_ROBUST: u32 = 4;
+
+/// `RTCGeometryType::RTC_GEOMETRY_TYPE_SPHERE_POINT`.
+pub const RTC_GEOMETRY_TYPE_SPHERE_POINT: u32 = 50;
+/// `RTCBufferType::RTC_BUFFER_TYPE_VERTEX`.
+pub const RTC_BUFFER_TYPE_VERTEX: u32 = 1;
+/// `RTCFormat::RTC_FORMAT_FLOAT4`.
+pub const RTC_FORMAT_FLOAT4: u32 = 0x9004;
+
+/// `RTCRayQueryFlags::RTC_RAY_QUERY_FLAG_INCOHERENT`.
+pub const RTC_RAY_QUERY_FLAG_INCOHERENT: u32 = 0;
+/// `RTCRayQueryFlags::RTC_RAY_QUERY_FLAG_COHERENT`.
+pub const RTC_RAY_QUERY_FLAG_COHERENT: u32 = 1 << 16;
+/// `RTCFeatureFlags::RTC_FEATURE_FLAG_ALL`.
+pub const RTC_FEATURE_FLAG_ALL: u32 = 0xffff_ffff;
+
+/// A valid lane in the `valid` mask of the packet queries.
+pub const LANE_ACTIVE: c_int = -1;
+/// An inactive lane.
+pub const LANE_INACTIVE: c_int = 0;
+
+/// `struct RTCRay`: one ray (48 bytes, align 16).
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RTCRay {
+    pub org_x: f32,
+    pub org_y: f32,
+    pub org_z: f32,
+    pub tnear: f32,
+    pub dir_x: f32,
+    pub dir_y: f32,
+    pub dir_z: f32,
+    pub time: f32,
+    pub tfar: f32,
+    pub mask: u32,
+    pub id: u32,
+    pub flags: u32,
+}
+
+/// `struct RTCHit` of Embree 4.3+ (48 bytes, align 16): includes `instPrimID`, which the library writes.
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RTCHit {
+    pub Ng_x: f32,
+    pub Ng_y: f32,
+    pub Ng_z: f32,
+    pub u: f32,
+    pub v: f32,
+    pub primID: u32,
+    pub geomID: u32,
+    pub instID: [u32; 1],
+    pub instPrimID: [u32; 1],
+}
+
+/// `struct RTCRayHit`: a ray and its hit (96 bytes, align 16).
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RTCRayHit {
+    pub ray: RTCRay,
+    pub hit: RTCHit,
+}
+
+/// `struct RTCRay16`: 16 rays as structure of arrays (768 bytes, align 64).
+#[repr(C, align(64))]
+#[derive(Clone, Copy, Debug)]
+pub struct RTCRay16 {
+    pub org_x: [f32; 16],
+    pub org_y: [f32; 16],
+    pub org_z: [f32; 16],
+    pub tnear: [f32; 16],
+    pub dir_x: [f32; 16],
+    pub dir_y: [f32; 16],
+    pub dir_z: [f32; 16],
+    pub time: [f32; 16],
+    pub tfar: [f32; 16],
+    pub mask: [u32; 16],
+    pub id: [u32; 16],
+    pub flags: [u32; 16],
+}
+
+/// `struct RTCHit16`: 16 hits as structure of arrays (576 bytes, align 64).
+#[repr(C, align(64))]
+#[derive(Clone, Copy, Debug)]
+pub struct RTCHit16 {
+    pub Ng_x: [f32; 16],
+    pub Ng_y: [f32; 16],
+    pub Ng_z: [f32; 16],
+    pub u: [f32; 16],
+    pub v: [f32; 16],
+    pub primID: [u32; 16],
+    pub geomID: [u32; 16],
+    pub instID: [[u32; 16]; 1],
+    pub instPrimID: [[u32; 16]; 1],
+}
+
+/// `struct RTCRayHit16`: 16 rays and their hits (1344 bytes, align 64).
+#[repr(C, align(64))]
+#[derive(Clone, Copy, Debug)]
+pub struct RTCRayHit16 {
+    pub ray: RTCRay16,
+    pub hit: RTCHit16,
+}
+
+/// `struct RTCIntersectArguments` (32 bytes); `RTCOccludedArguments` has the same layout.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct RTCIntersectArguments {
+    pub flags: u32,
+    pub feature_mask: u32,
+    pub context: *mut c_void,
+    pub filter: *const c_void,
+    pub intersect: *const c_void,
+}
+
+/// `struct RTCOccludedArguments` (32 bytes).
+pub type RTCOccludedArguments = RTCIntersectArguments;
+
+const _: () = assert!(size_of::<RTCRay>() == 48 && align_of::<RTCRay>() == 16);
+const _: () = assert!(size_of::<RTCHit>() == 48 && align_of::<RTCHit>() == 16);
+const _: () = assert!(size_of::<RTCRayHit>() == 96 && align_of::<RTCRayHit>() == 16);
+const _: () = assert!(std::mem::offset_of!(RTCRayHit, hit) == 48);
+const _: () = assert!(std::mem::offset_of!(RTCHit, instPrimID) == 32);
+const _: () = assert!(size_of::<RTCRay16>() == 768 && align_of::<RTCRay16>() == 64);
+const _: () = assert!(size_of::<RTCHit16>() == 576 && align_of::<RTCHit16>() == 64);
+const _: () = assert!(size_of::<RTCRayHit16>() == 768 + 576 && align_of::<RTCRayHit16>() == 64);
+const _: () = assert!(std::mem::offset_of!(RTCRayHit16, hit) == 768);
+const _: () = assert!(size_of::<RTCIntersectArguments>() == 32 && align_of::<RTCIntersectArguments>() == 8);
+
+/// `RTCErrorFunction`: `void (*)(void* userPtr, RTCError code, const char* str)`.
+pub type RTCErrorFunction = unsafe extern "C" fn(user: *mut c_void, code: u32, message: *const c_char);
+
+/// `rtcNewDevice`.
+pub type FnNewDevice = unsafe extern "C" fn(config: *const c_char) -> RTCDevice;
+/// `rtcReleaseDevice`.
+pub type FnReleaseDevice = unsafe extern "C" fn(device: RTCDevice);
+/// `rtcGetDeviceError`.
+pub type FnGetDeviceError = unsafe extern "C" fn(device: RTCDevice) -> u32;
+/// `rtcGetDeviceLastErrorMessage`.
+pub type FnGetDeviceLastErrorMessage = unsafe extern "C" fn(device: RTCDevice) -> *const c_char;
+/// `rtcSetDeviceErrorFunction`.
+pub type FnSetDeviceErrorFunction =
+    unsafe extern "C" fn(device: RTCDevice, function: Option<RTCErrorFunction>, user: *mut c_void);
+/// `rtcGetDeviceProperty`.
+pub type FnGetDeviceProperty = unsafe extern "C" fn(device: RTCDevice, property: u32) -> isize;
+/// `rtcNewScene`.
+pub type FnNewScene = unsafe extern "C" fn(device: RTCDevice) -> RTCScene;
+/// `rtcReleaseScene`.
+pub type FnReleaseScene = unsafe extern "C" fn(scene: RTCScene);
+/// `rtcSetSceneBuildQuality`.
+pub type FnSetSceneBuildQuality = unsafe extern "C" fn(scene: RTCScene, quality: u32);
+/// `rtcSetSceneFlags`.
+pub type FnSetSceneFlags = unsafe extern "C" fn(scene: RTCScene, flags: u32);
+/// `rtcCommitScene`.
+pub type FnCommitScene = unsafe extern "C" fn(scene: RTCScene);
+/// `rtcNewGeometry`.
+pub type FnNewGeometry = unsafe extern "C" fn(device: RTCDevice, kind: u32) -> RTCGeometry;
+/// `rtcSetNewGeometryBuffer`.
+pub type FnSetNewGeometryBuffer = unsafe extern "C" fn(
+    geometry: RTCGeometry,
+    kind: u32,
+    slot: c_uint,
+    format: u32,
+    byte_stride: usize,
+    item_count: usize,
+) -> *mut c_void;
+/// `rtcCommitGeometry`.
+pub type FnCommitGeometry = unsafe extern "C" fn(geometry: RTCGeometry);
+/// `rtcAttachGeometry`.
+pub type FnAttachGeometry = unsafe extern "C" fn(scene: RTCScene, geometry: RTCGeometry) -> c_uint;
+/// `rtcReleaseGeometry`.
+pub type FnReleaseGeometry = unsafe extern "C" fn(geometry: RTCGeometry);
+/// `rtcIntersect1`.
+pub type FnIntersect1 = unsafe extern "C" fn(scene: RTCScene, rayhit: *mut RTCRayHit, args: *mut RTCIntersectArguments);
+/// `rtcOccluded1`.
+pub type FnOccluded1 = unsafe extern "C" fn(scene: RTCScene, ray: *mut RTCRay, args: *mut RTCOccludedArguments);
+/// `rtcIntersect16`.
+pub type FnIntersect16 = unsafe extern "C" fn(
+    valid: *const c_int,
+    scene: RTCScene,
+    rayhit: *mut RTCRayHit16,
+    args: *mut RTCIntersectArguments,
+);

@@ -1,0 +1,18 @@
+//! Embree 4 as a peer, through a small hand-written binding loaded at run time (no link-time dependency).
+//!
+//! - [`abi`]: the C structs, constants and function types, sizes pinned at compile time;
+//! - [`library`]: finding `libembree4` (`EMBREE_LIB`, the system, an `embreex` wheel) and resolving symbols;
+//! - [`device`]: devices, their configuration and error capture;
+//! - [`scene`]: a committed scene of sphere points implementing [`tracer::accel::Accelerator`].
+
+pub mod abi;
+pub mod device;
+pub mod library;
+pub mod scene;
+
+#[cfg(test)]
+mod tests;
+
+pub use device::{DeviceInfo, EmbreeConfig, EmbreeDevice, EmbreeError, EmbreeQuality};
+pub use library::{EmbreeLibrary, EmbreeUnavailable, INSTALL_HINT, SearchInputs};
+pub use scene::EmbreeSpheres;

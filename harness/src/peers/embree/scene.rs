@@ -1,0 +1,206 @@
+//! A committed Embree scene of sphere points: single-ray and 16-wide packet queries.
+
+use std::sync::Arc;
+
+use tracer::accel::{Accelerator, Hit, TreeStats};
+use tracer::counters::Counters;
+use tracer::geometry::{Ray, Sphere};
+
+use super::abi::*;
+use super::device::{DeviceInner, EmbreeDevice, EmbreeError, EmbreeQuality};
+
+/// Our spheres as one Embree `RTC_GEOMETRY_TYPE_SPHERE_POINT` geometry (geomID 0) in a committed scene.
+pub struct EmbreeSpheres {
+    device: Arc<DeviceInner>,
+    scene: RTCScene,
+    count: usize,
+}
+
+// SAFETY: a committed Embree scene is immutable and Embree documents concurrent rtcIntersect*/rtcOccluded*
+// calls on it from any number of threads as safe; the handle is only released in Drop (exclusive access).
+unsafe impl Send for EmbreeSpheres {}
+// SAFETY: see `Send`; queries take `&self` and only read the scene.
+unsafe impl Sync for EmbreeSpheres {}
+
+impl std::fmt::Debug for EmbreeSpheres {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("EmbreeSpheres").field("spheres", &self.count).finish_non_exhaustive()
+    }
+}
+
+impl Drop for EmbreeSpheres {
+    fn drop(&mut self) {
+        // SAFETY: `scene` came from rtcNewScene and is released once; the device outlives it (we hold an Arc).
+        unsafe { (self.device.lib.api.release_scene)(self.scene) };
+    }
+}
+
+/// A ray in Embree's layout with an empty hit.
+#[inline(always)]
+fn ray_hit(ray: &Ray) -> RTCRayHit {
+    RTCRayHit {
+        ray: rtc_ray(ray),
+        hit: RTCHit { geomID: RTC_INVALID_GEOMETRY_ID, instID: [RTC_INVALID_GEOMETRY_ID], ..RTCHit::default() },
+    }
+}
+
+#[inline(always)]
+fn rtc_ray(ray: &Ray) -> RTCRay {
+    RTCRay {
+        org_x: ray.origin.x,
+        org_y: ray.origin.y,
+        org_z: ray.origin.z,
+        tnear: ray.t_min,
+        dir_x: ray.dir.x,
+        dir_y: ray.dir.y,
+        dir_z: ray.dir.z,
+        time: 0.0,
+        tfar: ray.t_max,
+        mask: u32::MAX,
+        id: 0,
+        flags: 0,
+    }
+}
+
+impl EmbreeSpheres {
+    /// Builds (commits) the scene; Embree errors reported during the build become `Err`.
+    pub fn build(device: &EmbreeDevice, spheres: &[Sphere], quality: EmbreeQuality) -> Result<Self, EmbreeError> {
+        let inner = device.inner.clone();
+        let api = inner.lib.api;
+        inner.take_error();
+        // SAFETY: a live device.
+        let scene = unsafe { (api.new_scene)(inner.raw) };
+        if scene.is_null() {
+            let why = inner.take_error().unwrap_or_else(|| "rtcNewScene returned null".into());
+            return Err(EmbreeError::Api(why));
+        }
+        // From here on `Drop` releases the scene on every path.
+        let this = Self { device: inner, scene, count: spheres.len() };
+        // SAFETY: a live scene and enum values from the headers.
+        unsafe {
+            (api.set_scene_build_quality)(scene, quality.raw());
+            (api.set_scene_flags)(scene, RTC_SCENE_FLAG_NONE);
+        }
+        if !spheres.is_empty() {
+            this.attach_spheres(spheres)?;
+        }
+        // SAFETY: a live scene; this is the BVH build.
+        unsafe { (api.commit_scene)(scene) };
+        match this.device.take_error() {
+            Some(why) => Err(EmbreeError::Api(why)),
+            None => Ok(this),
+        }
+    }
+
+    fn attach_spheres(&self, spheres: &[Sphere]) -> Result<(), EmbreeError> {
+        let api = self.device.lib.api;
+        // SAFETY: a live device and a geometry type from the headers.
+        let geometry = unsafe { (api.new_geometry)(self.device.raw, RTC_GEOMETRY_TYPE_SPHERE_POINT) };
+        if geometry.is_null() {
+            return Err(EmbreeError::Api(self.device.take_error().unwrap_or_else(|| "rtcNewGeometry failed".into())));
+        }
+        // One FLOAT4 (x, y, z, r) per sphere, in a buffer Embree allocates (and pads for 16-byte loads) and owns.
+        // SAFETY: a live geometry; stride 16 and `len` items of FLOAT4.
+        let buffer = unsafe {
+            (api.set_new_geometry_buffer)(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 16, spheres.len())
+        } as *mut [f32; 4];
+        let result = if buffer.is_null() {
+            Err(EmbreeError::Api(self.device.take_error().unwrap_or_else(|| "rtcSetNewGeometryBuffer failed".into())))
+        } else {
+            // SAFETY: Embree returned a writable buffer of `len` FLOAT4 items, 16-byte aligned.
+            let items = unsafe { std::slice::from_raw_parts_mut(buffer, spheres.len()) };
+            for (item, s) in items.iter_mut().zip(spheres) {
+                *item = [s.center.x, s.center.y, s.center.z, s.radius];
+            }
+            // SAFETY: a live geometry and scene; the scene keeps its own reference after attaching.
+            unsafe {
+                (api.commit_geometry)(geometry);
+                (api.attach_geometry)(self.scene, geometry);
+            }
+            Ok(())
+        };
+        // SAFETY: drops our reference; the scene (if attached) holds the geometry from now on.
+        unsafe { (api.release_geometry)(geometry) };
+        result
+    }
+
+    /// Number of spheres in the scene.
+    pub fn len(&self) -> usize {
+        self.count
+    }
+
+    /// True for a scene without spheres.
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+
+    /// Closest hits of up to 16 rays with one `rtcIntersect16` call; lanes past `rays.len()` are `None`.
+    pub fn intersect16(&self, rays: &[Ray]) -> [Option<Hit>; 16] {
+        assert!(rays.len() <= 16, "intersect16 takes at most 16 rays, got {}", rays.len());
+        let mut valid = [LANE_INACTIVE; 16];
+        // Inactive lanes hold a harmless, well-formed ray.
+        let mut packet = RTCRayHit16 {
+            ray: RTCRay16 {
+                org_x: [0.0; 16],
+                org_y: [0.0; 16],
+                org_z: [0.0; 16],
+                tnear: [0.0; 16],
+                dir_x: [0.0; 16],
+                dir_y: [0.0; 16],
+                dir_z: [1.0; 16],
+                time: [0.0; 16],
+                tfar: [-f32::INFINITY; 16],
+                mask: [u32::MAX; 16],
+                id: [0; 16],
+                flags: [0; 16],
+            },
+            hit: RTCHit16 {
+                Ng_x: [0.0; 16],
+                Ng_y: [0.0; 16],
+                Ng_z: [0.0; 16],
+                u: [0.0; 16],
+                v: [0.0; 16],
+                primID: [RTC_INVALID_GEOMETRY_ID; 16],
+                geomID: [RTC_INVALID_GEOMETRY_ID; 16],
+                instID: [[RTC_INVALID_GEOMETRY_ID; 16]],
+                instPrimID: [[RTC_INVALID_GEOMETRY_ID; 16]],
+            },
+        };
+        for (i, ray) in rays.iter().enumerate() {
+            valid[i] = LANE_ACTIVE;
+            let r = &mut packet.ray;
+            (r.org_x[i], r.org_y[i], r.org_z[i]) = (ray.origin.x, ray.origin.y, ray.origin.z);
+            (r.dir_x[i], r.dir_y[i], r.dir_z[i]) = (ray.dir.x, ray.dir.y, ray.dir.z);
+            (r.tnear[i], r.tfar[i]) = (ray.t_min, ray.t_max);
+        }
+        // SAFETY: a committed scene; `packet` is 64-byte aligned (its type's alignment) and fully initialized.
+        unsafe { (self.device.lib.api.intersect16)(valid.as_ptr(), self.scene, &mut packet, std::ptr::null_mut()) };
+        std::array::from_fn(|i| {
+            (valid[i] == LANE_ACTIVE && packet.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID)
+                .then(|| Hit { t: packet.ray.tfar[i], prim: packet.hit.primID[i] })
+        })
+    }
+}
+
+impl Accelerator for EmbreeSpheres {
+    #[inline]
+    fn intersect<C: Counters>(&self, ray: &Ray, _counters: &mut C) -> Option<Hit> {
+        let mut rh = ray_hit(ray);
+        // SAFETY: a committed scene and a properly aligned, initialized RTCRayHit; NULL arguments = defaults.
+        unsafe { (self.device.lib.api.intersect1)(self.scene, &mut rh, std::ptr::null_mut()) };
+        (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID).then_some(Hit { t: rh.ray.tfar, prim: rh.hit.primID })
+    }
+
+    #[inline]
+    fn occluded<C: Counters>(&self, ray: &Ray, _counters: &mut C) -> bool {
+        let mut r = rtc_ray(ray);
+        // SAFETY: a committed scene and a properly aligned, initialized RTCRay; NULL arguments = defaults.
+        unsafe { (self.device.lib.api.occluded1)(self.scene, &mut r, std::ptr::null_mut()) };
+        r.tfar == f32::NEG_INFINITY
+    }
+
+    /// Embree does not expose its tree: only the input bytes are known (nodes, depth and SAH report 0).
+    fn stats(&self) -> TreeStats {
+        TreeStats { nodes: 0, leaves: 0, depth: 0, bytes: self.count * 16, sah_cost: 0.0 }
+    }
+}

@@ -1,0 +1,145 @@
+//! Embree against brute force: single rays, occlusion and 16-wide packets, plus the loader's error.
+
+use std::path::PathBuf;
+
+use tracer::accel::{Accelerator, List};
+use tracer::counters::NoCounters;
+
+use super::*;
+use crate::peers::testing::{Tolerance, assert_agrees, embree_device, hit_grazes, same_hit, scenes};
+
+#[test]
+fn single_rays_agree_with_brute_force() {
+    let Some(device) = embree_device("single_rays_agree_with_brute_force") else { return };
+    for (label, spheres, rays) in scenes() {
+        let scene = EmbreeSpheres::build(&device, &spheres, EmbreeQuality::Medium).expect("build");
+        assert_eq!(scene.len(), spheres.len());
+        assert_agrees(&format!("embree {label}"), &scene, &spheres, &rays, Tolerance::Relative);
+    }
+}
+
+#[test]
+fn every_build_quality_agrees() {
+    let Some(device) = embree_device("every_build_quality_agrees") else { return };
+    let (label, spheres, rays) = scenes().into_iter().rfind(|(_, s, _)| s.len() == 2000).unwrap();
+    for quality in EmbreeQuality::ALL {
+        let scene = EmbreeSpheres::build(&device, &spheres, quality).expect("build");
+        assert_agrees(&format!("embree {} {label}", quality.name()), &scene, &spheres, &rays, Tolerance::Relative);
+    }
+}
+
+#[test]
+fn packets_agree_with_brute_force() {
+    let Some(device) = embree_device("packets_agree_with_brute_force") else { return };
+    for (label, spheres, rays) in scenes() {
+        let scene = EmbreeSpheres::build(&device, &spheres, EmbreeQuality::Medium).expect("build");
+        let reference = List::build(&spheres);
+        let mut bad = Vec::new();
+        let mut excused = 0;
+        // Full packets, then the same rays in partial packets of 7 (lanes 7..16 inactive).
+        for width in [16, 7] {
+            for (c, chunk) in rays.chunks(width).enumerate() {
+                let got = scene.intersect16(chunk);
+                for (lane, ray) in chunk.iter().enumerate() {
+                    let want = reference.intersect(ray, &mut NoCounters);
+                    if same_hit(&spheres, ray, want, got[lane], Tolerance::Relative) {
+                        continue;
+                    }
+                    if let Some((s, rel)) = hit_grazes(&spheres, ray, want, got[lane]) {
+                        eprintln!("embree packets {label}: ray {} grazes sphere {s} ({rel:.1e}): excused", c * width + lane);
+                        excused += 1;
+                    } else {
+                        bad.push(format!("width {width} ray {} {ray:?}: {:?} vs {want:?}", c * width + lane, got[lane]));
+                    }
+                }
+                assert!(got[chunk.len()..].iter().all(Option::is_none), "{label}: inactive lanes must report no hit");
+            }
+        }
+        if excused > 0 {
+            eprintln!("embree packets {label}: {excused} hit/miss disagreement(s) on grazing rays (excused, see GRAZING)");
+        }
+        assert!(bad.is_empty(), "embree packets {label}: {} disagreements:\n{}", bad.len(), bad[..bad.len().min(8)].join("\n"));
+    }
+}
+
+#[test]
+fn concurrent_queries_match_serial_ones() {
+    let Some(device) = embree_device("concurrent_queries_match_serial_ones") else { return };
+    let (_, spheres, rays) = scenes().into_iter().rfind(|(_, s, _)| s.len() == 2000).unwrap();
+    let scene = EmbreeSpheres::build(&device, &spheres, EmbreeQuality::Medium).expect("build");
+    let serial: Vec<_> = rays.iter().map(|r| scene.intersect(r, &mut NoCounters)).collect();
+    std::thread::scope(|s| {
+        for part in 0..4 {
+            let (scene, rays, serial) = (&scene, &rays, &serial);
+            s.spawn(move || {
+                for i in (part..rays.len()).step_by(4) {
+                    assert_eq!(scene.intersect(&rays[i], &mut NoCounters), serial[i]);
+                }
+            });
+        }
+    });
+}
+
+#[test]
+fn device_reports_version_and_isa() {
+    let Some(device) = embree_device("device_reports_version_and_isa") else { return };
+    let info = device.info();
+    assert!(info.version.starts_with("4."), "{info:?}");
+    assert!([4, 8, 16].contains(&info.native_packet), "{info:?}");
+    assert_eq!(info.config, "threads=2");
+    let status = crate::peers::embree_status().expect("status");
+    assert_eq!(status.version, info.version);
+}
+
+#[test]
+fn bad_isa_is_an_error_not_a_crash() {
+    let Some(_) = embree_device("bad_isa_is_an_error_not_a_crash") else { return };
+    let config = EmbreeConfig { isa: Some("no-such-isa".into()), ..EmbreeConfig::default() };
+    // Embree either rejects the value or ignores it; it must not abort the process.
+    if let Err(e) = EmbreeDevice::new(&config) {
+        assert!(e.to_string().contains("Embree error"), "{e}");
+    }
+}
+
+#[test]
+fn explicit_bogus_path_gives_one_line_with_the_install_hint() {
+    let inputs = SearchInputs { explicit: Some(PathBuf::from("/nonexistent")), ..SearchInputs::default() };
+    let err = EmbreeLibrary::load(&inputs).expect_err("/nonexistent must not load");
+    let msg = err.to_string();
+    assert!(!msg.contains('\n'), "one line: {msg}");
+    assert!(msg.contains("python3 -m pip install embreex==4.4.0.post1"), "{msg}");
+    assert!(msg.contains("EMBREE_LIB=/nonexistent"), "{msg}");
+    assert_eq!(err.tried.len(), 1, "an explicit path is the only candidate: {err:?}");
+}
+
+#[test]
+fn site_dirs_without_the_wheel_are_listed_as_tried() {
+    let dir = std::env::temp_dir().join(format!("bvhlab-no-embree-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("embreex.libs")).unwrap();
+    let inputs = SearchInputs { site_dirs: vec![dir.clone()], ..SearchInputs::default() };
+    let err = EmbreeLibrary::load(&inputs).expect_err("an empty embreex.libs must not load");
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(err.to_string().contains("embreex.libs/libembree4*.so*: none"), "{err}");
+}
+
+
+#[test]
+fn camera_hits_match_exactly_without_excuses() {
+    let Some(device) = embree_device("camera_hits_match_exactly_without_excuses") else { return };
+    use tracer::accel::{BvhParams, FlatBvh};
+    use tracer::executor::Strategy;
+    use tracer::render::trace_primary;
+    for kind in tracer::scene::SceneKind::ALL {
+        for n in [2_000, 50_000] {
+            let scene = kind.generate(n, 7);
+            let camera = scene.camera.with_resolution(256, 192);
+            let ours = FlatBvh::build(&scene.spheres, &BvhParams::default());
+            let embree = EmbreeSpheres::build(&device, &scene.spheres, EmbreeQuality::Medium).expect("build");
+            let (want, _) = trace_primary::<_, NoCounters>(&camera, &ours, &Strategy::SERIAL);
+            let (got, _) = trace_primary::<_, NoCounters>(&camera, &embree, &Strategy::SERIAL);
+            assert_eq!(got.hit_count(), want.hit_count(), "{} n={n}", kind.name());
+            let differ = want.hits.iter().zip(&got.hits).filter(|(w, g)| (w.prim == u32::MAX) != (g.prim == u32::MAX)).count();
+            assert_eq!(differ, 0, "{} n={n}: pixels whose hit/miss differ", kind.name());
+        }
+    }
+}

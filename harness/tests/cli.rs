@@ -1,0 +1,160 @@
+//! The harness as a user runs it: bad configs, a killed and resumed sweep, and the quick paper experiment.
+
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn harness() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_harness"));
+    c.current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap());
+    c
+}
+
+fn temp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("bvhlab-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Rows of a runs.csv as (config_id, repetition).
+fn recorded(runs: &Path) -> Vec<(String, u32)> {
+    let text = std::fs::read_to_string(runs).unwrap();
+    text.lines().skip(1).map(|l| {
+        let f: Vec<&str> = l.split(',').collect();
+        (f[1].to_string(), f[3].parse().unwrap())
+    }).collect()
+}
+
+
+#[test]
+fn bad_configs_exit_2_with_one_line_and_write_nothing() {
+    let dir = temp("bad");
+    std::fs::write(dir.join("present.csv"), "0,0,0,1\n").unwrap();
+    let cases: &[(&str, &str, &str)] = &[
+        ("unknown top key", "name = \"t\"\nfoo = 1\n[sweep]\n", "foo: unknown key (allowed: name,"),
+        ("unknown sweep key", "name = \"t\"\n[sweep]\nobects = [1]\n", "sweep.obects: unknown key (allowed: scene, objects,"),
+        ("wrong type", "name = \"t\"\nrepetitions = \"five\"\n[sweep]\n", "repetitions: expected an integer in 1..=1000, found a string"),
+        ("empty sweep", "name = \"t\"\n[sweep]\nobjects = []\n", "sweep.objects: empty list (give at least one value; allowed: integers"),
+        ("unknown accelerator", "name = \"t\"\n[sweep]\naccel = [\"bvh\", \"bhv\"]\n", "sweep.accel[1]: unknown value \"bhv\" (allowed: list, bvh, flat-bvh)"),
+        ("zero threads", "name = \"t\"\n[sweep]\nthreads = [0]\n", "sweep.threads[0]: 0 is out of range (allowed: integers 1..=4096 or all)"),
+        ("leaf size", "name = \"t\"\n[sweep]\nleaf_size = 17\n", "sweep.leaf_size[0]: 17 is out of range (allowed: integers 1..=16)"),
+        ("missing sweep", "name = \"t\"\n", "missing [sweep] table"),
+        ("unreadable sphere file", "name = \"t\"\n[sweep]\nscene = \"sphere-file\"\nsphere_file = \"absent.csv\"\n", "sweep.sphere_file: "),
+        ("bad sphere file", "name = \"t\"\n[sweep]\nscene = \"sphere-file\"\nsphere_file = \"bad.csv\"\n", "bad.csv: line 1, column 4 (r): expected a positive number"),
+        ("unknown reference", "name = \"t\"\nreference = \"nope\"\n[sweep]\n[[series]]\nlabel = \"a\"\n", "reference: unknown series \"nope\" (allowed: a)"),
+        ("bad plot metric", "name = \"t\"\n[sweep]\n[[plot]]\nfile = \"f\"\ny = \"speed\"\n", "plot[0].y: unknown metric \"speed\" (allowed: total_s,"),
+        ("bad order", "name = \"t\"\norder = \"random\"\n[sweep]\n", "order: unknown value \"random\" (allowed: interleaved, sequential, shuffled)"),
+        ("invalid toml", "name = \"t\n", "line 1: invalid TOML"),
+    ];
+    std::fs::write(dir.join("bad.csv"), "0,0,0,-1\n").unwrap();
+    for (what, text, expected) in cases {
+        let cfg = dir.join("bad.toml");
+        std::fs::write(&cfg, text).unwrap();
+        let out_dir = dir.join("out");
+        for args in [vec!["run", cfg.to_str().unwrap(), "--out", out_dir.to_str().unwrap()], vec!["validate", cfg.to_str().unwrap()]] {
+            let o = harness().args(&args).output().unwrap();
+            let err = stderr(&o);
+            assert_eq!(o.status.code(), Some(2), "{what}: {err}");
+            assert_eq!(err.trim_end().lines().count(), 1, "{what}: one line: {err}");
+            assert!(err.contains("bad.toml"), "{what}: names the file: {err}");
+            assert!(err.contains(expected), "{what}: expected {expected:?} in {err}");
+            assert!(!out_dir.exists(), "{what}: nothing written");
+        }
+    }
+    let o = harness().args(["run", dir.join("missing.toml").to_str().unwrap()]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("missing.toml: cannot read"), "{}", stderr(&o));
+    let o = harness().args(["run", "--shard", "3/2", "x.toml"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2), "clap errors exit 2 too");
+}
+
+#[test]
+fn validate_prints_runs_and_an_estimate() {
+    let o = harness().args(["validate", "experiments/paper.toml"]).output().unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.contains("configurations 414"), "{out}");
+    assert!(out.contains("runs           2070 recorded"), "{out}");
+    assert!(out.contains("estimate"), "{out}");
+}
+
+#[test]
+fn a_killed_sweep_resumes_without_losing_or_duplicating_rows() {
+    let dir = temp("resume");
+    let cfg = dir.join("resume.toml");
+    // 3 object counts x 2 seeds x 4 repetitions = 24 rows of a few tens of milliseconds each.
+    std::fs::write(&cfg, "name = \"resume\"\nrepetitions = 4\nwarmups = 1\n[sweep]\naccel = \"list\"\nobjects = [400, 500, 600]\nseed = [1, 2]\nwidth = 96\nheight = 64\n").unwrap();
+    let out = dir.join("out");
+    let runs = out.join("runs.csv");
+    let mut child = harness()
+        .args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while std::fs::read_to_string(&runs).map_or(0, |t| t.lines().count()) < 4 && start.elapsed() < Duration::from_secs(120) {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let before = recorded(&runs);
+    assert!(before.len() >= 3, "rows were flushed as runs finished");
+    assert!(before.len() < 24, "the kill came before the end ({} rows); make the runs longer", before.len());
+
+    let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--resume"]).output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let after = recorded(&runs);
+    assert_eq!(after.len(), 24, "no row lost");
+    assert_eq!(after.iter().collect::<HashSet<_>>().len(), 24, "no row duplicated");
+    assert_eq!(after[..before.len()], before[..], "earlier rows kept as they were");
+    assert!(out.join("REPORT.md").exists());
+
+    // Resuming a complete sweep runs nothing more.
+    let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--resume"]).output().unwrap();
+    assert!(o.status.success());
+    assert_eq!(recorded(&runs).len(), 24);
+
+    // Resuming with another config is refused.
+    std::fs::write(&cfg, "name = \"resume\"\nrepetitions = 5\n[sweep]\nobjects = [400]\n").unwrap();
+    let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--resume"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}
+
+#[test]
+fn quick_paper_experiment_end_to_end() {
+    let dir = temp("paper");
+    let out = dir.join("paper");
+    let o = harness().args(["run", "experiments/paper.toml", "--quick", "--out", out.to_str().unwrap()]).output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows = recorded(&out.join("runs.csv"));
+    assert_eq!(rows.len(), 6 * 4 * 3, "6 series x 4 object counts x 1 seed x 3 repetitions");
+    let report = std::fs::read_to_string(out.join("REPORT.md")).unwrap();
+    for must in ["time-vs-objects", "speedup-vs-objects", "flat BVH is within 10%", "serial·list"] {
+        assert!(report.contains(must), "REPORT.md lacks {must:?}");
+    }
+    for f in ["runs.parquet", "summary.csv", "summary.parquet", "figures/time-vs-objects.svg", "figures/time-vs-objects.png"] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    // Every row's image hash is the same for every series at the same scene: all structures and strategies agree.
+    let text = std::fs::read_to_string(out.join("runs.csv")).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+    let mut by_scene = std::collections::HashMap::new();
+    for l in text.lines().skip(1) {
+        let f: Vec<&str> = l.split(',').collect();
+        let prev = by_scene.entry((f[col("objects")].to_string(), f[col("seed")].to_string())).or_insert(f[col("image_hash")].to_string());
+        assert_eq!(*prev, f[col("image_hash")], "all series render the same image");
+    }
+    // The report can be rebuilt from the rows alone.
+    std::fs::remove_file(out.join("REPORT.md")).unwrap();
+    let o = harness().args(["report", out.to_str().unwrap()]).output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.join("REPORT.md").exists());
+}

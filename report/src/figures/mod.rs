@@ -1,0 +1,116 @@
+//! The figures of a report: one chart per `[[plot]]`, written as `figures/<file>.svg` and `.png`.
+
+mod chart;
+
+use std::path::{Path, PathBuf};
+
+use crate::error::Error;
+use crate::pool::{self, Point};
+use crate::rows::Rows;
+use crate::spec::{PlotKind, PlotSpec, ReportSpec};
+
+use chart::{Chart, ChartPoint, Line};
+
+/// Draws every plot of `spec` into `dir/figures/`; returns the files written.
+pub fn draw_all(dir: &Path, rows: &Rows, spec: &ReportSpec) -> Result<Vec<PathBuf>, Error> {
+    let figures = dir.join("figures");
+    std::fs::create_dir_all(&figures).map_err(|e| Error::write(&figures, e))?;
+    let mut files = Vec::new();
+    for plot in &spec.plots {
+        let svg = figures.join(format!("{}.svg", plot.file));
+        let png = figures.join(format!("{}.png", plot.file));
+        chart::render(&chart_of(rows, spec, plot), &svg, &png).map_err(|(path, e)| Error::write(path, e))?;
+        files.extend([svg, png]);
+    }
+    Ok(files)
+}
+
+/// The series a plot draws, in legend order.
+fn plotted_series<'a>(spec: &'a ReportSpec, plot: &'a PlotSpec) -> Vec<&'a str> {
+    let wanted = |s: &str| plot.series.is_empty() || plot.series.iter().any(|w| w == s);
+    let mut series: Vec<&str> = spec.series.iter().map(String::as_str).filter(|s| wanted(s)).collect();
+    // Series named by the plot but missing from the legend order still get drawn.
+    series.extend(plot.series.iter().map(String::as_str).filter(|s| !spec.series.iter().any(|k| k == s)));
+    series
+}
+
+/// What a plot shows, as chart data.
+fn chart_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Chart {
+    let reference = spec.reference.as_deref();
+    let metric_ok = rows.is_numeric(&plot.y);
+    let mut lines = Vec::new();
+    for series in plotted_series(spec, plot) {
+        let points: Vec<Point> = match (plot.kind, reference) {
+            _ if !metric_ok => Vec::new(),
+            (PlotKind::Metric, _) => pool::metric_points(&rows.runs, series, &plot.x, &plot.y),
+            (_, Some(reference)) if reference == series => Vec::new(),
+            (PlotKind::Speedup | PlotKind::Efficiency, Some(reference)) => {
+                pool::ratio_points(spec, &rows.runs, reference, series, &plot.x, &plot.y)
+            }
+            (_, None) => Vec::new(),
+        };
+        let per = |p: &Point| if plot.kind == PlotKind::Efficiency { p.threads } else { 1.0 };
+        let points: Vec<ChartPoint> = points
+            .iter()
+            .map(|p| ChartPoint {
+                x: p.x,
+                y: p.estimate.value / per(p),
+                lo: p.estimate.lo / per(p),
+                hi: p.estimate.hi / per(p),
+            })
+            .collect();
+        // Position in the config's series order: the same colour and marker in every figure.
+        let style = spec.series.iter().position(|s| s == series).unwrap_or(spec.series.len() + lines.len());
+        if !points.is_empty() {
+            lines.push(Line { label: series.to_string(), style, points });
+        }
+    }
+    let reference = reference.unwrap_or("reference");
+    let (y_label, guide) = match plot.kind {
+        PlotKind::Metric => (metric_label(&plot.y), None),
+        PlotKind::Speedup if is_time(&plot.y) => {
+            (format!("speedup vs {reference} (×)"), Some((1.0, format!("same as {reference}"))))
+        }
+        PlotKind::Speedup => {
+            (format!("{} ratio, {reference} / series (×)", plot.y), Some((1.0, format!("same as {reference}"))))
+        }
+        PlotKind::Efficiency => {
+            (format!("efficiency: speedup vs {reference} / threads"), Some((1.0, "ideal".to_string())))
+        }
+    };
+    let title = if lines.is_empty() { format!("{} (no data)", plot.title) } else { plot.title.clone() };
+    Chart { title, x_label: axis_label(&plot.x), y_label, log_x: plot.log_x, log_y: plot.log_y, lines, guide }
+}
+
+fn is_time(column: &str) -> bool {
+    column.ends_with("_s") && column != "mrays_per_s"
+}
+
+/// A y axis label with units.
+fn metric_label(column: &str) -> String {
+    match column {
+        "total_s" => "total time (s)".into(),
+        "trace_s" => "trace time (s)".into(),
+        "build_s" => "build time (s)".into(),
+        "scene_s" => "scene time (s)".into(),
+        "encode_s" => "encode time (s)".into(),
+        "mrays_per_s" => "throughput (Mrays/s)".into(),
+        "nodes_per_ray" => "nodes visited per ray".into(),
+        "box_tests_per_ray" => "box tests per ray".into(),
+        "prim_tests_per_ray" => "primitive tests per ray".into(),
+        "sah_cost" => "SAH cost".into(),
+        "tree_bytes" => "tree size (bytes)".into(),
+        other => other.replace('_', " "),
+    }
+}
+
+/// An x axis label.
+fn axis_label(column: &str) -> String {
+    match column {
+        "objects" => "objects (spheres)".into(),
+        "threads" => "worker threads".into(),
+        "leaf_size" => "max leaf size".into(),
+        "sah_bins" => "SAH bins".into(),
+        other => other.replace('_', " "),
+    }
+}

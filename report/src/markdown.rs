@@ -1,0 +1,229 @@
+//! REPORT.md: what ran, notes, figures, claims, a summary table pooled over seeds, the config.
+
+use std::collections::BTreeSet;
+use std::fmt::Write as _;
+
+use crate::claims::ClaimResult;
+use crate::pool;
+use crate::rows::{Rows, Run, SETTINGS};
+use crate::spec::{ClaimKind, ReportSpec, Verdict};
+use crate::stats;
+
+/// The whole REPORT.md text.
+pub fn report(rows: &Rows, spec: &ReportSpec, claims: &[ClaimResult]) -> String {
+    let mut md = String::new();
+    let _ = writeln!(md, "# {}\n", spec.name);
+    if !spec.description.trim().is_empty() {
+        let _ = writeln!(md, "{}\n", spec.description.trim());
+    }
+    what_ran(&mut md, rows, spec);
+    if !spec.notes.is_empty() {
+        md.push_str("## Notes\n\n");
+        for note in &spec.notes {
+            let _ = writeln!(md, "- {note}");
+        }
+        md.push('\n');
+    }
+    figures(&mut md, spec);
+    claims_table(&mut md, spec, claims);
+    summary_table(&mut md, rows, spec);
+    md.push_str("## Config as run\n\n```toml\n");
+    md.push_str(spec.config_text.trim_end());
+    md.push_str("\n```\n\n## Regenerate\n\n");
+    md.push_str(
+        "This file, `summary.csv`, `summary.parquet`, `runs.parquet` and `figures/` are rebuilt from `runs.csv` \
+         by `harness report <dir>` (with `<dir>` this directory).\n",
+    );
+    md
+}
+
+/// Distinct values of a text column, in sorted order, joined.
+fn distinct(runs: &[Run], column: &str) -> String {
+    let values: BTreeSet<&str> = runs.iter().map(|r| r.text(column)).collect();
+    values.into_iter().collect::<Vec<_>>().join(", ")
+}
+
+fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
+    let runs = &rows.runs;
+    let configs: BTreeSet<&str> = runs.iter().map(Run::config_id).collect();
+    let reps: Vec<usize> =
+        configs.iter().map(|id| runs.iter().filter(|r| r.config_id() == *id).count()).collect();
+    let (rep_min, rep_max) = (reps.iter().min().unwrap_or(&0), reps.iter().max().unwrap_or(&0));
+    let reps_text = if rep_min == rep_max { format!("{rep_min}") } else { format!("{rep_min}–{rep_max}") };
+    let loads = pool::samples(runs, "load_avg_1m");
+    let load_min = loads.iter().copied().fold(f64::INFINITY, f64::min);
+    let load_max = loads.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let dirty = runs.iter().any(|r| r.text("git_dirty") == "true");
+    let stamps: BTreeSet<&str> = runs.iter().map(|r| r.text("timestamp")).collect();
+
+    md.push_str("## What ran\n\n");
+    let _ = writeln!(md, "- Experiment: {} (rows say: {})", spec.name, distinct(runs, "experiment"));
+    let _ = writeln!(
+        md,
+        "- Rows: {} timed repetitions of {} configurations ({reps_text} repetitions each)",
+        runs.len(),
+        configs.len()
+    );
+    let _ = writeln!(
+        md,
+        "- Machine: {}, {} logical cores; 1-minute load average min {} / median {} / max {}",
+        distinct(runs, "cpu_model"),
+        distinct(runs, "logical_cores"),
+        num(load_min),
+        num(stats::median(&loads)),
+        num(load_max)
+    );
+    let _ = writeln!(
+        md,
+        "- Code: commit {}{}; {}; harness {}",
+        distinct(runs, "git_commit"),
+        if dirty { " (dirty: uncommitted changes)" } else { " (clean)" },
+        distinct(runs, "rustc"),
+        distinct(runs, "harness_version")
+    );
+    let _ = writeln!(
+        md,
+        "- Time: {} to {}",
+        stamps.first().copied().unwrap_or("?"),
+        stamps.last().copied().unwrap_or("?")
+    );
+    md.push_str(
+        "- Statistics: medians over repetitions (and seeds where pooled); intervals are 95% percentile-bootstrap \
+         intervals of the median (or of the ratio of medians), 2000 resamples\n\n",
+    );
+    let over = runs.iter().filter(|r| r.num("threads") > r.num("logical_cores")).count();
+    if over > 0 {
+        let _ = writeln!(
+            md,
+            "> **Warning:** {over} rows ran with more threads than the machine's logical cores; \
+             their times measure oversubscription.\n"
+        );
+    }
+}
+
+fn figures(md: &mut String, spec: &ReportSpec) {
+    if spec.plots.is_empty() {
+        return;
+    }
+    md.push_str("## Figures\n\n");
+    for plot in &spec.plots {
+        let _ = writeln!(
+            md,
+            "![{}](figures/{}.svg)\n\n[PNG](figures/{}.png)\n",
+            plot.title.replace(['[', ']'], ""),
+            plot.file,
+            plot.file
+        );
+    }
+}
+
+fn claims_table(md: &mut String, spec: &ReportSpec, claims: &[ClaimResult]) {
+    if claims.is_empty() {
+        return;
+    }
+    md.push_str("## Claims\n\n");
+    md.push_str("| claim | the paper said | measured ratio [95% CI] | threshold | verdict | detail |\n");
+    md.push_str("|---|---|---|---|---|---|\n");
+    for (claim, result) in spec.claims.iter().zip(claims) {
+        let measured = if result.ratio.is_finite() {
+            format!("{} [{}, {}]", num(result.ratio), num(result.lo), num(result.hi))
+        } else {
+            "—".to_string()
+        };
+        let threshold = match claim.kind {
+            ClaimKind::Faster { factor, per_thread: true, .. } if result.threshold.is_finite() => format!(
+                "≥ {} ({} × {} threads)",
+                compact(result.threshold),
+                compact(factor),
+                compact(result.threshold / factor)
+            ),
+            ClaimKind::Faster { .. } => format!("≥ {}", compact(result.threshold)),
+            ClaimKind::Within { tolerance, .. } => format!("1 ± {}", compact(tolerance)),
+        };
+        let verdict = match result.verdict {
+            Verdict::Holds => "**holds**",
+            Verdict::Fails => "**fails**",
+            Verdict::Inconclusive => "inconclusive",
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {} | {measured} | {threshold} | {verdict} | {} |",
+            cell(&result.text),
+            cell(claim.paper.as_deref().unwrap_or("—")),
+            cell(&result.detail)
+        );
+    }
+    md.push_str("\nRatios are `metric(than) / metric(series)` per object count, pooled over seeds.\n\n");
+}
+
+fn summary_table(md: &mut String, rows: &Rows, spec: &ReportSpec) {
+    let runs = &rows.runs;
+    let varying: Vec<&str> = SETTINGS
+        .iter()
+        .copied()
+        .filter(|c| *c != "seed")
+        .filter(|c| runs.iter().map(|r| r.text(c)).collect::<BTreeSet<_>>().len() > 1)
+        .collect();
+    md.push_str("## Summary\n\n");
+    md.push_str("One row per configuration with seeds pooled; full per-configuration statistics are in `summary.csv`.\n\n");
+    let mut header = vec!["series".to_string()];
+    header.extend(varying.iter().map(|c| c.to_string()));
+    header.extend(["seeds", "n", "median total_s [95% CI]", "median Mrays/s"].map(String::from));
+    if let Some(reference) = &spec.reference {
+        header.push(format!("speedup vs {reference} [95% CI]"));
+    }
+    let _ = writeln!(md, "| {} |", header.iter().map(|h| cell(h)).collect::<Vec<_>>().join(" | "));
+    let _ = writeln!(md, "|{}", "---|".repeat(header.len()));
+    for group in pool::seed_pools(runs) {
+        let first = group[0];
+        let mut cells = vec![cell(first.series())];
+        cells.extend(varying.iter().map(|c| cell(first.text(c))));
+        let seeds: BTreeSet<&str> = group.iter().map(|r| r.text("seed")).collect();
+        cells.push(seeds.len().to_string());
+        cells.push(group.len().to_string());
+        let key = format!("{}|pooled", first.config_id());
+        let total = stats::median_ci(&pool::samples(group.iter().copied(), "total_s"), stats::seed_for(&key));
+        cells.push(format!("{} [{}, {}]", num(total.value), num(total.lo), num(total.hi)));
+        cells.push(num(stats::median(&pool::samples(group.iter().copied(), "mrays_per_s"))));
+        if let Some(reference) = &spec.reference {
+            let key = format!("{}|pooled speedup", first.config_id());
+            cells.push(match pool::ratio_against(spec, runs, reference, &group, "total_s", &["seed"], &key) {
+                Some(e) => format!("{} [{}, {}]", num(e.value), num(e.lo), num(e.hi)),
+                None => "—".into(),
+            });
+        }
+        let _ = writeln!(md, "| {} |", cells.join(" | "));
+    }
+    md.push('\n');
+}
+
+/// A table cell: pipes escaped, line breaks flattened.
+fn cell(text: &str) -> String {
+    text.replace('|', "\\|").replace('\n', " ")
+}
+
+/// A number as short as it can be written exactly to four significant digits (`2`, `0.1`, `4.182`).
+fn compact(v: f64) -> String {
+    let text = num(v);
+    if text.contains('.') && !text.contains('e') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
+    }
+}
+
+/// A number with four significant digits (more for large integers), `—` when not finite.
+pub fn num(v: f64) -> String {
+    if !v.is_finite() {
+        return "—".into();
+    }
+    if v == 0.0 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if a < 1e-4 || a >= 1e9 {
+        return format!("{v:.3e}");
+    }
+    let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+    format!("{v:.decimals$}")
+}

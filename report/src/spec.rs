@@ -1,0 +1,95 @@
+//! What a report shows, as the experiment config says: series, reference, plots and claims.
+
+use std::collections::BTreeMap;
+
+/// Everything `report::write` needs besides the rows.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ReportSpec {
+    /// Experiment name.
+    pub name: String,
+    /// One-paragraph description.
+    pub description: String,
+    /// Label of the series speedups are measured against (`None`: no speedups).
+    pub reference: Option<String>,
+    /// Series labels in config order (legend order).
+    pub series: Vec<String>,
+    /// For each series label, the setting columns (see ROWS.md) its `[[series]]` table fixes.
+    pub series_fixed: BTreeMap<String, Vec<String>>,
+    /// Figures to draw.
+    pub plots: Vec<PlotSpec>,
+    /// Claims to check.
+    pub claims: Vec<ClaimSpec>,
+    /// The config file's text as run, quoted in REPORT.md.
+    pub config_text: String,
+    /// Notes the harness wants in the report (skipped series, thread counts above the core count, …).
+    pub notes: Vec<String>,
+}
+
+/// What a figure's y axis shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlotKind {
+    /// The metric itself (median over repetitions and seeds, 95% bootstrap interval as error bars).
+    Metric,
+    /// Reference series' metric divided by each series' metric (a speedup when the metric is a time).
+    Speedup,
+    /// Speedup against the reference divided by thread count (parallel efficiency), x = threads.
+    Efficiency,
+}
+
+/// One `[[plot]]` table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlotSpec {
+    /// File stem under `figures/` (`<file>.svg`, `<file>.png`).
+    pub file: String,
+    /// Figure title.
+    pub title: String,
+    /// What the y axis shows.
+    pub kind: PlotKind,
+    /// Setting column on the x axis (e.g. `objects`, `threads`).
+    pub x: String,
+    /// Metric column (e.g. `total_s`, `mrays_per_s`).
+    pub y: String,
+    /// Logarithmic x axis.
+    pub log_x: bool,
+    /// Logarithmic y axis.
+    pub log_y: bool,
+    /// Series to draw (empty: all).
+    pub series: Vec<String>,
+}
+
+/// One `[[claim]]` table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClaimSpec {
+    /// The claim in words, as the report prints it.
+    pub text: String,
+    /// What the seed paper said on this point, when the claim reproduces one of its statements.
+    pub paper: Option<String>,
+    /// What is compared.
+    pub kind: ClaimKind,
+    /// Metric column compared (a time: smaller is better).
+    pub metric: String,
+    /// Only points with at least this many objects.
+    pub min_objects: Option<u64>,
+    /// Only points with at most this many objects.
+    pub max_objects: Option<u64>,
+}
+
+/// The comparison a claim makes; ratios are `metric(than) / metric(series)`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ClaimKind {
+    /// `series` is at least `factor` times faster than `than` (times `threads` of `series` when `per_thread`).
+    Faster { series: String, than: String, factor: f64, per_thread: bool },
+    /// `series` and `than` are within `tolerance` (e.g. 0.10) of each other.
+    Within { series: String, than: String, tolerance: f64 },
+}
+
+/// A claim's verdict.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    /// The 95% interval lies entirely on the claimed side at every point.
+    Holds,
+    /// At some point the interval lies entirely on the wrong side.
+    Fails,
+    /// Neither: the intervals straddle the threshold, or no point matched.
+    Inconclusive,
+}

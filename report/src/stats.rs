@@ -1,0 +1,211 @@
+//! Plain statistics over samples: median, mean, sample standard deviation and percentile-bootstrap
+//! 95% intervals of a median and of a ratio of medians. Deterministic: every bootstrap takes a seed.
+
+use tracer::rng::SplitMix64;
+
+/// Bootstrap resamples per interval.
+pub const RESAMPLES: usize = 2000;
+/// Two-sided coverage of the intervals.
+pub const LEVEL: f64 = 0.95;
+/// Mixed into every bootstrap seed, so report seeds differ from scene seeds.
+const SEED_BASE: u64 = 0x6276_686C_6162_2D72; // "bvhlab-r"
+
+/// A value with its 95% interval.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Estimate {
+    /// The point estimate.
+    pub value: f64,
+    /// Lower end of the interval.
+    pub lo: f64,
+    /// Upper end of the interval.
+    pub hi: f64,
+}
+
+/// Median (mean of the two middle values for even counts); NaN for no samples.
+pub fn median(samples: &[f64]) -> f64 {
+    let mut sorted = samples.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    median_of_sorted(&sorted)
+}
+
+fn median_of_sorted(sorted: &[f64]) -> f64 {
+    let n = sorted.len();
+    match n {
+        0 => f64::NAN,
+        _ if n % 2 == 1 => sorted[n / 2],
+        _ => (sorted[n / 2 - 1] + sorted[n / 2]) / 2.0,
+    }
+}
+
+/// Arithmetic mean; NaN for no samples.
+#[allow(dead_code)] // the reference polars' aggregates are tested against (summary.rs)
+pub fn mean(samples: &[f64]) -> f64 {
+    samples.iter().sum::<f64>() / samples.len() as f64
+}
+
+/// Sample standard deviation (divisor n-1); 0 for fewer than two samples.
+#[allow(dead_code)] // the reference polars' aggregates are tested against (summary.rs)
+pub fn std_dev(samples: &[f64]) -> f64 {
+    if samples.len() < 2 {
+        return 0.0;
+    }
+    let m = mean(samples);
+    let ss: f64 = samples.iter().map(|x| (x - m) * (x - m)).sum();
+    (ss / (samples.len() - 1) as f64).sqrt()
+}
+
+/// Quantile `p` in [0, 1] of sorted values, linearly interpolated between order statistics.
+pub fn quantile_of_sorted(sorted: &[f64], p: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let pos = p.clamp(0.0, 1.0) * (sorted.len() - 1) as f64;
+    let below = pos.floor() as usize;
+    let above = pos.ceil() as usize;
+    sorted[below] + (sorted[above] - sorted[below]) * (pos - below as f64)
+}
+
+/// FNV-1a hash of a string: a stable way to turn a key (a config id, a point) into a seed.
+pub fn hash_str(key: &str) -> u64 {
+    key.bytes().fold(0xCBF2_9CE4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x0100_0000_01B3))
+}
+
+/// The bootstrap seed for a key: a fixed constant xor the key's hash.
+pub fn seed_for(key: &str) -> u64 {
+    SEED_BASE ^ hash_str(key)
+}
+
+/// Median of one resample (with replacement) of `samples`, using `scratch` as buffer.
+fn resampled_median(samples: &[f64], rng: &mut SplitMix64, scratch: &mut Vec<f64>) -> f64 {
+    scratch.clear();
+    scratch.extend((0..samples.len()).map(|_| samples[rng.below(samples.len() as u64) as usize]));
+    scratch.sort_by(f64::total_cmp);
+    median_of_sorted(scratch)
+}
+
+/// The percentile interval of bootstrap replicates.
+fn percentile_interval(mut replicates: Vec<f64>) -> (f64, f64) {
+    replicates.sort_by(f64::total_cmp);
+    let tail = (1.0 - LEVEL) / 2.0;
+    (quantile_of_sorted(&replicates, tail), quantile_of_sorted(&replicates, 1.0 - tail))
+}
+
+/// The samples in ascending order: resampling sorted samples makes an interval depend on the
+/// multiset of samples only, not on the order the rows came in.
+fn sorted(samples: &[f64]) -> Vec<f64> {
+    let mut sorted = samples.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    sorted
+}
+
+/// Median with its 95% percentile-bootstrap interval; `seed` fixes the resamples.
+pub fn median_ci(samples: &[f64], seed: u64) -> Estimate {
+    let samples = &sorted(samples)[..];
+    let value = median(samples);
+    if samples.is_empty() {
+        return Estimate { value, lo: f64::NAN, hi: f64::NAN };
+    }
+    let mut rng = SplitMix64::new(seed);
+    let mut scratch = Vec::with_capacity(samples.len());
+    let replicates = (0..RESAMPLES).map(|_| resampled_median(samples, &mut rng, &mut scratch)).collect();
+    let (lo, hi) = percentile_interval(replicates);
+    Estimate { value, lo, hi }
+}
+
+/// `median(numerator) / median(denominator)` with a 95% bootstrap interval, both sample sets
+/// resampled independently; `seed` fixes the resamples.
+pub fn ratio_ci(numerator: &[f64], denominator: &[f64], seed: u64) -> Estimate {
+    let (numerator, denominator) = (&sorted(numerator)[..], &sorted(denominator)[..]);
+    let value = median(numerator) / median(denominator);
+    if numerator.is_empty() || denominator.is_empty() {
+        return Estimate { value: f64::NAN, lo: f64::NAN, hi: f64::NAN };
+    }
+    let mut rng = SplitMix64::new(seed);
+    let mut scratch = Vec::with_capacity(numerator.len().max(denominator.len()));
+    let replicates = (0..RESAMPLES)
+        .map(|_| {
+            let num = resampled_median(numerator, &mut rng, &mut scratch);
+            let den = resampled_median(denominator, &mut rng, &mut scratch);
+            num / den
+        })
+        .collect();
+    let (lo, hi) = percentile_interval(replicates);
+    Estimate { value, lo, hi }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), 2.5);
+        assert_eq!(median(&[7.0]), 7.0);
+        assert!(median(&[]).is_nan());
+    }
+
+    #[test]
+    fn mean_and_sample_std() {
+        let xs = [2.0, 4.0, 4.0, 4.0, 5.0, 5.0, 7.0, 9.0];
+        assert_eq!(mean(&xs), 5.0);
+        // Sum of squared deviations is 32; the sample variance divides by n-1 = 7.
+        assert!((std_dev(&xs) - (32.0f64 / 7.0).sqrt()).abs() < 1e-15);
+        assert_eq!(std_dev(&[1.0, 3.0]), 2.0f64.sqrt());
+        assert_eq!(std_dev(&[5.0]), 0.0);
+    }
+
+    #[test]
+    fn quantiles_interpolate() {
+        let xs = [1.0, 2.0, 3.0, 4.0, 5.0];
+        assert_eq!(quantile_of_sorted(&xs, 0.0), 1.0);
+        assert_eq!(quantile_of_sorted(&xs, 0.5), 3.0);
+        assert_eq!(quantile_of_sorted(&xs, 0.125), 1.5);
+        assert_eq!(quantile_of_sorted(&xs, 1.0), 5.0);
+    }
+
+    #[test]
+    fn bootstrap_interval_contains_the_median_and_is_deterministic() {
+        let xs = [1.0, 1.2, 0.9, 1.1, 1.05, 0.95, 1.3, 1.0, 0.98];
+        let a = median_ci(&xs, seed_for("a"));
+        assert_eq!(a.value, 1.0);
+        assert!(a.lo <= a.value && a.value <= a.hi, "{a:?}");
+        assert!(a.lo < a.hi, "spread samples give a non-degenerate interval: {a:?}");
+        assert!(a.lo >= 0.9 && a.hi <= 1.3, "interval inside the sample range: {a:?}");
+        assert_eq!(a, median_ci(&xs, seed_for("a")));
+        // The order of the samples does not matter.
+        let mut reversed = xs;
+        reversed.reverse();
+        assert_eq!(a, median_ci(&reversed, seed_for("a")));
+        // Another seed gives other resamples but the same point value.
+        assert_eq!(median_ci(&xs, seed_for("b")).value, a.value);
+    }
+
+    #[test]
+    fn bootstrap_of_one_sample_is_degenerate() {
+        let e = median_ci(&[0.25], 17);
+        assert_eq!((e.value, e.lo, e.hi), (0.25, 0.25, 0.25));
+        let r = ratio_ci(&[3.0], &[1.5], 17);
+        assert_eq!((r.value, r.lo, r.hi), (2.0, 2.0, 2.0));
+    }
+
+    #[test]
+    fn ratio_interval_brackets_the_ratio_of_medians() {
+        let num = [10.0, 11.0, 12.0, 10.5, 11.5];
+        let den = [2.0, 2.2, 1.8, 2.1, 1.9];
+        let r = ratio_ci(&num, &den, 99);
+        assert_eq!(r.value, 11.0 / 2.0);
+        assert!(r.lo < r.value && r.value < r.hi, "{r:?}");
+        // No resample can leave the range min/max .. max/min.
+        assert!(r.lo >= 10.0 / 2.2 && r.hi <= 12.0 / 1.8, "{r:?}");
+        assert_eq!(r, ratio_ci(&num, &den, 99));
+    }
+
+    #[test]
+    fn seeds_depend_on_the_key_only() {
+        assert_eq!(seed_for("0123456789abcdef"), seed_for("0123456789abcdef"));
+        assert_ne!(seed_for("0123456789abcdef"), seed_for("0123456789abcdee"));
+        // FNV-1a of the empty string is its offset basis.
+        assert_eq!(hash_str(""), 0xCBF2_9CE4_8422_2325);
+    }
+}

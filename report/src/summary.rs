@@ -1,0 +1,83 @@
+//! Per-configuration summaries (`summary.csv`, `summary.parquet`): polars aggregates each
+//! configuration's repetitions; bootstrap intervals and speedups are added from the plain samples.
+
+use polars::prelude::*;
+
+use crate::pool;
+use crate::rows::{Rows, Run, SETTINGS};
+use crate::spec::ReportSpec;
+use crate::stats;
+
+/// Metrics summarised per configuration.
+pub const METRICS: [&str; 4] = ["total_s", "trace_s", "build_s", "mrays_per_s"];
+
+/// Columns equal in every repetition of a configuration, carried from the first one.
+const DETERMINISTIC: [&str; 9] = [
+    "rays", "nodes_per_ray", "box_tests_per_ray", "prim_tests_per_ray", "tree_nodes", "tree_depth", "tree_bytes",
+    "sah_cost", "image_hash",
+];
+
+/// Statistics per metric, in column order (`<metric>_<stat>`).
+const STATS: [&str; 7] = ["mean", "median", "std", "min", "max", "median_lo", "median_hi"];
+
+/// One row per configuration (first-appearance order) with the columns described in the crate docs.
+pub fn summarise(rows: &Rows, spec: &ReportSpec) -> PolarsResult<DataFrame> {
+    let mut aggs: Vec<Expr> = ["experiment", "series"].iter().chain(&SETTINGS).map(|c| col(*c).first()).collect();
+    aggs.push(len().cast(DataType::Int64).alias("n"));
+    for metric in METRICS {
+        aggs.push(col(metric).mean().alias(format!("{metric}_mean")));
+        aggs.push(col(metric).median().alias(format!("{metric}_median")));
+        aggs.push(col(metric).std(1).fill_null(lit(0.0)).alias(format!("{metric}_std")));
+        aggs.push(col(metric).min().alias(format!("{metric}_min")));
+        aggs.push(col(metric).max().alias(format!("{metric}_max")));
+    }
+    aggs.extend(DETERMINISTIC.iter().map(|c| col(*c).first()));
+    let mut frame = rows.frame.clone().lazy().group_by_stable([col("config_id")]).agg(aggs).collect()?;
+
+    let ids: Vec<String> =
+        frame.column("config_id")?.str()?.iter().map(|id| id.unwrap_or("").to_string()).collect();
+    let groups: Vec<Vec<&Run>> =
+        ids.iter().map(|id| rows.runs.iter().filter(|run| run.config_id() == id).collect()).collect();
+
+    for metric in METRICS {
+        let intervals: Vec<stats::Estimate> = ids
+            .iter()
+            .zip(&groups)
+            .map(|(id, group)| stats::median_ci(&pool::samples(group.iter().copied(), metric), stats::seed_for(id)))
+            .collect();
+        frame.with_column(float_column(&format!("{metric}_median_lo"), intervals.iter().map(|e| Some(e.lo))))?;
+        frame.with_column(float_column(&format!("{metric}_median_hi"), intervals.iter().map(|e| Some(e.hi))))?;
+    }
+
+    let speedups: Vec<Option<stats::Estimate>> = ids
+        .iter()
+        .zip(&groups)
+        .map(|(id, group)| {
+            let reference = spec.reference.as_deref()?;
+            let key = format!("{id}|speedup");
+            pool::ratio_against(spec, &rows.runs, reference, group, "total_s", &[], &key)
+        })
+        .collect();
+    frame.with_column(float_column("speedup", speedups.iter().map(|e| e.map(|e| e.value))))?;
+    frame.with_column(float_column("speedup_lo", speedups.iter().map(|e| e.map(|e| e.lo))))?;
+    frame.with_column(float_column("speedup_hi", speedups.iter().map(|e| e.map(|e| e.hi))))?;
+
+    frame.select(column_order())
+}
+
+/// The summary's columns in output order.
+fn column_order() -> Vec<String> {
+    let mut names: Vec<String> =
+        ["config_id", "experiment", "series"].iter().chain(&SETTINGS).map(|c| c.to_string()).collect();
+    names.push("n".into());
+    for metric in METRICS {
+        names.extend(STATS.iter().map(|stat| format!("{metric}_{stat}")));
+    }
+    names.extend(DETERMINISTIC.iter().map(|c| c.to_string()));
+    names.extend(["speedup", "speedup_lo", "speedup_hi"].map(String::from));
+    names
+}
+
+fn float_column(name: &str, values: impl Iterator<Item = Option<f64>>) -> Column {
+    Column::new(name.into(), values.collect::<Vec<Option<f64>>>())
+}

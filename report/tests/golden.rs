@@ -1,0 +1,241 @@
+//! Golden test: a small hand-made runs.csv with obvious medians, written into a temp dir.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use report::spec::{ClaimKind, ClaimSpec, PlotKind, PlotSpec, ReportSpec, Verdict};
+
+const LIST: &str = "serial·list";
+const BVH: &str = "serial·bvh";
+
+/// A fresh, empty directory under the system temp dir holding a copy of `runs` as runs.csv.
+fn run_dir(name: &str, runs: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("bvhlab-report-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("runs.csv"), runs).unwrap();
+    dir
+}
+
+fn golden_rows() -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/runs.csv")).unwrap()
+}
+
+fn claim(text: &str, kind: ClaimKind, min_objects: Option<u64>) -> ClaimSpec {
+    ClaimSpec { text: text.into(), paper: None, kind, metric: "total_s".into(), min_objects, max_objects: None }
+}
+
+fn faster(factor: f64, per_thread: bool) -> ClaimKind {
+    ClaimKind::Faster { series: BVH.into(), than: LIST.into(), factor, per_thread }
+}
+
+fn plot(file: &str, title: &str, kind: PlotKind, x: &str, log: bool) -> PlotSpec {
+    PlotSpec {
+        file: file.into(),
+        title: title.into(),
+        kind,
+        x: x.into(),
+        y: "total_s".into(),
+        log_x: log,
+        log_y: log,
+        series: vec![],
+    }
+}
+
+fn spec() -> ReportSpec {
+    let fixed: Vec<String> =
+        ["accel", "split", "leaf_size", "sah_bins", "traversal", "strategy", "threads"].map(String::from).to_vec();
+    let mut paper_claim = claim("BVH is at least 2× faster than the list", faster(2.0, true), None);
+    paper_claim.paper = Some("the BVH is much faster".into());
+    ReportSpec {
+        name: "golden".into(),
+        description: "Two series, two object counts, two seeds, three repetitions.".into(),
+        reference: Some(LIST.into()),
+        series: vec![LIST.into(), BVH.into()],
+        series_fixed: BTreeMap::from([(LIST.to_string(), fixed.clone()), (BVH.to_string(), fixed)]),
+        plots: vec![
+            plot("total_vs_objects", "Total time vs objects", PlotKind::Metric, "objects", true),
+            plot("speedup", "Speedup vs objects", PlotKind::Speedup, "objects", false),
+            plot("efficiency", "Efficiency vs threads", PlotKind::Efficiency, "threads", false),
+        ],
+        claims: vec![
+            paper_claim,
+            claim("BVH is 100× faster", faster(100.0, false), None),
+            claim("BVH is 11.5/2.75× faster at 100 objects", faster(11.5 / 2.75, false), Some(100)),
+            claim(
+                "BVH and list are within 10%",
+                ClaimKind::Within { series: BVH.into(), than: LIST.into(), tolerance: 0.1 },
+                None,
+            ),
+            claim("BVH is 2× faster at a million objects", faster(2.0, false), Some(1_000_000)),
+        ],
+        config_text: "name = \"golden\"\n[[series]]\nlabel = \"serial·list\"\n".into(),
+        notes: vec!["a note from the harness".into()],
+    }
+}
+
+/// summary.csv as config_id → column → text.
+fn read_summary(dir: &Path) -> BTreeMap<String, BTreeMap<String, String>> {
+    let text = std::fs::read_to_string(dir.join("summary.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    lines
+        .map(|line| {
+            let row: BTreeMap<String, String> =
+                header.iter().zip(line.split(',')).map(|(h, v)| (h.to_string(), v.to_string())).collect();
+            (row["config_id"].clone(), row)
+        })
+        .collect()
+}
+
+fn value(summary: &BTreeMap<String, BTreeMap<String, String>>, id: &str, column: &str) -> f64 {
+    summary[id][column].parse().unwrap_or_else(|_| panic!("{id} {column} = {:?}", summary[id][column]))
+}
+
+#[test]
+fn golden_report() {
+    let dir = run_dir("golden", &golden_rows());
+    let spec = spec();
+    let outcome = report::write(&dir, &spec).unwrap();
+
+    // Summaries: one row per configuration, ids kept as text (leading zeros, all digits).
+    let summary = read_summary(&dir);
+    assert_eq!(summary.len(), 8);
+    let list10 = "0000000000001000"; // serial·list, 10 objects, seed 1: total 1.0, 1.5, 1.25
+    let list100 = "0000000000000042"; // serial·list, 100 objects, seed 1: total 10, 12, 11
+    let bvh10 = "0000000000005000"; // serial·bvh, 10 objects, seed 1: total 0.25, 0.375, 0.3125
+    let bvh100 = "0000000000007000"; // serial·bvh, 100 objects, seed 1: total 2.0, 3.0, 2.5
+    assert_eq!(summary[list10]["series"], LIST);
+    assert_eq!(summary[list100]["image_hash"], "0000000000000011");
+    for (id, median, min, max, std) in [
+        (list10, 1.25, 1.0, 1.5, 0.25),
+        (list100, 11.0, 10.0, 12.0, 1.0),
+        (bvh10, 0.3125, 0.25, 0.375, 0.0625),
+        (bvh100, 2.5, 2.0, 3.0, 0.5),
+    ] {
+        assert_eq!(value(&summary, id, "n"), 3.0);
+        assert_eq!(value(&summary, id, "total_s_median"), median, "{id}");
+        assert_eq!(value(&summary, id, "total_s_mean"), median, "{id}");
+        assert_eq!(value(&summary, id, "total_s_min"), min, "{id}");
+        assert_eq!(value(&summary, id, "total_s_max"), max, "{id}");
+        assert!((value(&summary, id, "total_s_std") - std).abs() < 1e-12, "{id}");
+        let (lo, hi) = (value(&summary, id, "total_s_median_lo"), value(&summary, id, "total_s_median_hi"));
+        assert!(min <= lo && lo <= median && median <= hi && hi <= max, "{id}: [{lo}, {hi}]");
+    }
+    // bvh build_s is 0.0625 in every repetition, so trace_s = total_s - 0.0625.
+    assert_eq!(value(&summary, bvh10, "trace_s_median"), 0.25);
+    assert_eq!(value(&summary, bvh10, "build_s_std"), 0.0);
+    assert_eq!(value(&summary, bvh10, "tree_depth"), 3.0);
+    // Speedups: median(reference) / median(configuration), same objects and seed.
+    assert_eq!(value(&summary, list10, "speedup"), 1.0);
+    assert_eq!(value(&summary, bvh10, "speedup"), 1.25 / 0.3125);
+    assert_eq!(value(&summary, bvh100, "speedup"), 11.0 / 2.5);
+    let (lo, hi) = (value(&summary, bvh100, "speedup_lo"), value(&summary, bvh100, "speedup_hi"));
+    assert!(10.0 / 3.0 <= lo && lo <= 11.0 / 2.5 && 11.0 / 2.5 <= hi && hi <= 12.0 / 2.0, "[{lo}, {hi}]");
+
+    // Claims.
+    let verdicts: Vec<Verdict> = outcome.claims.iter().map(|c| c.verdict).collect();
+    use Verdict::*;
+    assert_eq!(verdicts, [Holds, Fails, Inconclusive, Fails, Inconclusive]);
+    let holds = &outcome.claims[0];
+    assert_eq!(holds.threshold, 2.0, "factor × 1 thread");
+    assert!(holds.lo >= 2.0 && holds.detail.starts_with("2 points"), "{holds:?}");
+    assert!(outcome.claims[1].hi < 100.0);
+    let straddles = &outcome.claims[2];
+    // Pooled over seeds at 100 objects: list median 11.5, bvh median 2.75.
+    assert_eq!(straddles.ratio, 11.5 / 2.75);
+    assert!(straddles.lo < straddles.ratio && straddles.ratio < straddles.hi, "{straddles:?}");
+    assert!(straddles.detail.contains("1 point ") && straddles.detail.contains("100 objects"), "{straddles:?}");
+    assert!(outcome.claims[3].lo > 1.1);
+    let empty = &outcome.claims[4];
+    assert!(empty.ratio.is_nan() && empty.detail.contains("no points"), "{empty:?}");
+
+    // Files.
+    for name in ["runs.parquet", "summary.parquet"] {
+        let bytes = std::fs::read(dir.join(name)).unwrap();
+        assert!(bytes.starts_with(b"PAR1") && bytes.ends_with(b"PAR1"), "{name}");
+    }
+    for file in ["total_vs_objects", "speedup", "efficiency"] {
+        let png = std::fs::read(dir.join(format!("figures/{file}.png"))).unwrap();
+        assert!(png.starts_with(b"\x89PNG\r\n\x1a\n") && png.len() > 10_000, "{file}.png: {} bytes", png.len());
+        let svg = std::fs::read_to_string(dir.join(format!("figures/{file}.svg"))).unwrap();
+        assert!(svg.contains("<svg") && svg.contains(BVH), "{file}.svg");
+        assert!(outcome.files.contains(&dir.join(format!("figures/{file}.svg"))));
+    }
+    let metric_svg = std::fs::read_to_string(dir.join("figures/total_vs_objects.svg")).unwrap();
+    assert!(metric_svg.contains(LIST) && metric_svg.contains("total time (s)"));
+    assert!(std::fs::read_to_string(dir.join("figures/speedup.svg")).unwrap().contains("speedup vs serial·list (×)"));
+
+    // REPORT.md.
+    let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
+    for needle in [
+        "# golden",
+        "## What ran",
+        "24 timed repetitions of 8 configurations (3 repetitions each)",
+        "load average min 0.5000 / median 1.000 / max 1.500",
+        "a note from the harness",
+        "![Total time vs objects](figures/total_vs_objects.svg)",
+        "![Speedup vs objects](figures/speedup.svg)",
+        "| claim | the paper said | measured ratio [95% CI] | threshold | verdict |",
+        "| BVH is at least 2× faster than the list | the BVH is much faster |",
+        "| ≥ 2 (2 × 1 threads) | **holds** |",
+        "| ≥ 100 | **fails** |",
+        "| 1 ± 0.1 | **fails** |",
+        "**fails**",
+        "| inconclusive |",
+        "## Summary",
+        "```toml\nname = \"golden\"",
+        "harness report <dir>",
+    ] {
+        assert!(md.contains(needle), "REPORT.md lacks {needle:?}:\n{md}");
+    }
+    assert!(!md.contains("Warning"), "no row ran more threads than cores");
+    // Summary table pooled over seeds: 2 series × 2 object counts, speedup of bvh at 10 objects = 1.375 / 0.34375.
+    assert!(md.contains("| serial·bvh | 10 | bvh | sah | 4 | 16 | front-to-back | 2 | 6 |"), "{md}");
+    assert!(md.contains("| 4.000 ["), "{md}");
+    // Set REPORT_KEEP_TEST_OUTPUT to look at the report and figures afterwards.
+    if std::env::var_os("REPORT_KEEP_TEST_OUTPUT").is_none() {
+        let _ = std::fs::remove_dir_all(&dir);
+    } else {
+        eprintln!("golden report kept in {}", dir.display());
+    }
+}
+
+#[test]
+fn row_order_does_not_change_the_numbers() {
+    let rows = golden_rows();
+    let mut lines: Vec<&str> = rows.lines().collect();
+    let header = lines.remove(0);
+    lines.reverse();
+    let reversed = format!("{header}\n{}\n", lines.join("\n"));
+    let (a, b) = (run_dir("order-a", &rows), run_dir("order-b", &reversed));
+    let (oa, ob) = (report::write(&a, &spec()).unwrap(), report::write(&b, &spec()).unwrap());
+    assert_eq!(format!("{:?}", oa.claims), format!("{:?}", ob.claims), "NaN-safe comparison");
+    // Equal up to float summation order (polars' std may differ in the last bit).
+    let (sa, sb) = (read_summary(&a), read_summary(&b));
+    assert_eq!(sa.keys().collect::<Vec<_>>(), sb.keys().collect::<Vec<_>>());
+    for (id, row) in &sa {
+        for (column, text) in row {
+            let other = &sb[id][column];
+            match (text.parse::<f64>(), other.parse::<f64>()) {
+                (Ok(x), Ok(y)) => assert!((x - y).abs() <= 1e-12 * x.abs().max(y.abs()), "{id} {column}: {x} vs {y}"),
+                _ => assert_eq!(text, other, "{id} {column}"),
+            }
+        }
+    }
+    let _ = (std::fs::remove_dir_all(&a), std::fs::remove_dir_all(&b));
+}
+
+#[test]
+fn errors_name_the_file() {
+    let dir = std::env::temp_dir().join(format!("bvhlab-report-{}-missing", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let err = report::write(&dir, &spec()).unwrap_err().to_string();
+    assert!(err.contains("runs.csv") && !err.contains('\n'), "{err}");
+
+    let without_seed = golden_rows().replace(",seed,", ",seeds,");
+    let dir = run_dir("no-seed", &without_seed);
+    let err = report::write(&dir, &spec()).unwrap_err().to_string();
+    assert!(err.contains("runs.csv") && err.contains("`seed`"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
