@@ -4,7 +4,8 @@
 //! - [`scene`] makes deterministic scenes from a seed (or parses a sphere file);
 //! - [`accel`] builds an acceleration structure ([`accel::List`], [`accel::Bvh`], [`accel::FlatBvh`]);
 //! - [`executor`] runs rows of an image under a parallel [`executor::Strategy`];
-//! - [`render`] shades full Whitted images or runs the primary-ray kernel.
+//! - [`render`] shades full Whitted images or runs the primary-ray kernel;
+//! - [`rays`] holds fixed ray sets (primary, shadow, diffuse) traced identically by every backend.
 //!
 //! The crate does no file or terminal I/O; [`render::Image::write_png`] encodes into any writer.
 
@@ -13,6 +14,7 @@ pub mod counters;
 pub mod executor;
 pub mod fingerprint;
 pub mod geometry;
+pub mod rays;
 pub mod render;
 pub mod rng;
 pub mod scene;

@@ -32,6 +32,22 @@ pub trait Accelerator: Send + Sync {
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool;
     /// Size and quality of the built structure.
     fn stats(&self) -> TreeStats;
+
+    /// Closest hits of many rays (`out[i]` for `rays[i]`, misses as `PrimaryHits::MISS`); packet backends override it.
+    fn intersect_batch<C: Counters>(&self, rays: &[Ray], out: &mut [Hit], counters: &mut C) {
+        for (ray, o) in rays.iter().zip(out) {
+            counters.ray();
+            *o = self.intersect(ray, counters).unwrap_or(crate::render::PrimaryHits::MISS);
+        }
+    }
+
+    /// Occlusion of many rays; packet backends override it.
+    fn occluded_batch<C: Counters>(&self, rays: &[Ray], out: &mut [bool], counters: &mut C) {
+        for (ray, o) in rays.iter().zip(out) {
+            counters.ray();
+            *o = self.occluded(ray, counters);
+        }
+    }
 }
 
 /// Which acceleration structure to build.

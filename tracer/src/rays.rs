@@ -1,0 +1,235 @@
+//! Fixed ray sets: the same rays for every accelerator and peer, generated once per scene.
+//!
+//! - `primary`: one camera ray per pixel, closest hit.
+//! - `shadow`: from each primary hit point toward the scene's first light, any hit (segments).
+//! - `diffuse`: one cosine-distributed bounce from each primary hit point, closest hit (incoherent).
+//!
+//! Hit points come from a reference accelerator's primary hits (every structure agrees with brute force),
+//! and directions are sampled with [`SplitMix64`] using only `+ − × ÷` and `sqrt`, so a ray set is the same
+//! on every machine. [`trace`] runs a set under a [`Strategy`] through [`Accelerator::intersect_batch`] /
+//! [`Accelerator::occluded_batch`].
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use crate::accel::{Accelerator, Hit};
+use crate::counters::Counters;
+use crate::executor::Strategy;
+use crate::fingerprint::Fnv64;
+use crate::geometry::Ray;
+use crate::render::PrimaryHits;
+use crate::rng::SplitMix64;
+use crate::scene::Scene;
+
+/// Which ray set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RayKind {
+    /// Camera rays, closest hit.
+    Primary,
+    /// Primary hit points to the first light, any hit.
+    Shadow,
+    /// Cosine-distributed bounces from primary hit points, closest hit.
+    Diffuse,
+}
+
+impl RayKind {
+    /// All three.
+    pub const ALL: [RayKind; 3] = [RayKind::Primary, RayKind::Shadow, RayKind::Diffuse];
+
+    /// The kebab-case name used in configs.
+    pub fn name(self) -> &'static str {
+        match self {
+            RayKind::Primary => "primary",
+            RayKind::Shadow => "shadow",
+            RayKind::Diffuse => "diffuse",
+        }
+    }
+
+    /// True for any-hit (occlusion) queries.
+    pub fn is_occlusion(self) -> bool {
+        self == RayKind::Shadow
+    }
+}
+
+/// A fixed list of rays and the query to ask of each.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RaySet {
+    /// What the set is.
+    pub kind: RayKind,
+    /// The rays.
+    pub rays: Vec<Ray>,
+}
+
+/// The answers to a ray set: closest hits (miss = [`PrimaryHits::MISS`]) or occlusion flags.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RayAnswers {
+    /// One closest hit per ray.
+    Closest(Vec<Hit>),
+    /// One occlusion flag per ray.
+    Occluded(Vec<bool>),
+}
+
+impl RayAnswers {
+    /// Stable hash of every answer (hit distance bits and sphere index, or the flag).
+    pub fn hash(&self) -> u64 {
+        let mut h = Fnv64::default();
+        match self {
+            RayAnswers::Closest(hits) => hits.iter().for_each(|x| {
+                h.f32(x.t).u32(x.prim);
+            }),
+            RayAnswers::Occluded(flags) => flags.iter().for_each(|&f| {
+                h.bytes(&[f as u8]);
+            }),
+        }
+        h.finish()
+    }
+
+    /// Number of rays that hit something.
+    pub fn hit_count(&self) -> usize {
+        match self {
+            RayAnswers::Closest(hits) => hits.iter().filter(|h| h.prim != PrimaryHits::MISS.prim).count(),
+            RayAnswers::Occluded(flags) => flags.iter().filter(|&&f| f).count(),
+        }
+    }
+}
+
+/// An orthonormal basis around unit `n` (Duff et al. 2017), branch-free and transcendental-free.
+fn basis(n: Vec3) -> (Vec3, Vec3) {
+    let sign = 1.0f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), Vec3::new(b, sign + n.y * n.y * a, -n.y))
+}
+
+/// A cosine-distributed unit vector around `n` (Malley's method with a rejection-sampled disk).
+fn cosine_direction(n: Vec3, rng: &mut SplitMix64) -> Vec3 {
+    let (x, y) = loop {
+        let (x, y) = (rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+        if x * x + y * y < 1.0 {
+            break (x as f32, y as f32);
+        }
+    };
+    let z = (1.0 - x * x - y * y).max(0.0).sqrt();
+    let (t, b) = basis(n);
+    (t * x + b * y + n * z).normalize()
+}
+
+impl RaySet {
+    /// One closest-hit ray per pixel of the scene's camera, row-major.
+    pub fn primary(scene: &Scene) -> Self {
+        let cam = scene.camera;
+        let rays = cam.rays();
+        let rays = (0..cam.height).flat_map(|y| (0..cam.width).map(move |x| rays.ray(x, y))).collect();
+        RaySet { kind: RayKind::Primary, rays }
+    }
+
+    /// Hit points and outward normals (facing the ray) of the primary rays that hit, in pixel order.
+    fn surface_points(scene: &Scene, primary: &RaySet, hits: &[Hit]) -> Vec<(Vec3, Vec3)> {
+        primary
+            .rays
+            .iter()
+            .zip(hits)
+            .filter(|(_, h)| h.prim != PrimaryHits::MISS.prim)
+            .map(|(r, h)| {
+                let p = r.at(h.t);
+                let n = scene.spheres[h.prim as usize].normal_at(p);
+                let n = if n.dot(r.dir) > 0.0 { -n } else { n };
+                (p + n * (1e-4 * p.abs().max_element().max(1.0)), n)
+            })
+            .collect()
+    }
+
+    /// From every primary hit point toward the first light (segments ending at the light); empty without lights.
+    pub fn shadow(scene: &Scene, primary: &RaySet, hits: &[Hit]) -> Self {
+        let rays = match scene.lights.first() {
+            None => vec![],
+            Some(light) => Self::surface_points(scene, primary, hits)
+                .into_iter()
+                .map(|(o, _)| {
+                    let to = light.position - o;
+                    let d = to.length();
+                    Ray::segment(o, to / d.max(f32::MIN_POSITIVE), d)
+                })
+                .collect(),
+        };
+        RaySet { kind: RayKind::Shadow, rays }
+    }
+
+    /// One cosine-distributed bounce from every primary hit point, drawn from `seed`.
+    pub fn diffuse(scene: &Scene, primary: &RaySet, hits: &[Hit], seed: u64) -> Self {
+        let mut rng = SplitMix64::new(seed);
+        let rays = Self::surface_points(scene, primary, hits)
+            .into_iter()
+            .map(|(o, n)| Ray::new(o, cosine_direction(n, &mut rng)))
+            .collect();
+        RaySet { kind: RayKind::Diffuse, rays }
+    }
+
+    /// The set of `kind` for `scene`, using `reference`'s primary hits for the secondary sets.
+    pub fn generate<A: Accelerator>(kind: RayKind, scene: &Scene, reference: &A, seed: u64) -> Self {
+        let primary = Self::primary(scene);
+        if kind == RayKind::Primary {
+            return primary;
+        }
+        let hits = match trace::<_, crate::counters::NoCounters>(reference, &primary, &Strategy::SERIAL).0 {
+            RayAnswers::Closest(h) => h,
+            RayAnswers::Occluded(_) => unreachable!("primary rays ask for closest hits"),
+        };
+        match kind {
+            RayKind::Shadow => Self::shadow(scene, &primary, &hits),
+            _ => Self::diffuse(scene, &primary, &hits, seed),
+        }
+    }
+}
+
+/// Rays per unit of work handed to the executor (a multiple of 16 so packet backends fill their packets).
+pub const RAYS_PER_CHUNK: usize = 256;
+
+/// Traces every ray of `set` with `accel` under `strategy`; answers are in ray order.
+pub fn trace<A: Accelerator, C: Counters>(accel: &A, set: &RaySet, strategy: &Strategy) -> (RayAnswers, C) {
+    let n = set.rays.len();
+    let rows = |out_len: usize| out_len.div_ceil(RAYS_PER_CHUNK) * RAYS_PER_CHUNK;
+    let rays_of = |row: usize, len: usize| {
+        let start = (row * RAYS_PER_CHUNK).min(n);
+        &set.rays[start..(start + len).min(n)]
+    };
+    if set.kind.is_occlusion() {
+        let mut out = vec![false; rows(n)];
+        let c = strategy.run_rows(RAYS_PER_CHUNK, &mut out, |row, chunk, c: &mut C| {
+            let rays = rays_of(row, chunk.len());
+            accel.occluded_batch(rays, &mut chunk[..rays.len()], c);
+        });
+        out.truncate(n);
+        (RayAnswers::Occluded(out), c)
+    } else {
+        let mut out = vec![PrimaryHits::MISS; rows(n)];
+        let c = strategy.run_rows(RAYS_PER_CHUNK, &mut out, |row, chunk, c: &mut C| {
+            let rays = rays_of(row, chunk.len());
+            accel.intersect_batch(rays, &mut chunk[..rays.len()], c);
+        });
+        out.truncate(n);
+        (RayAnswers::Closest(out), c)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn basis_is_orthonormal_and_cosine_directions_face_the_normal() {
+        let mut rng = SplitMix64::new(3);
+        for n in [Vec3::X, -Vec3::Z, Vec3::Z, Vec3::new(0.3, -0.8, 0.52).normalize()] {
+            let (t, b) = basis(n);
+            for (u, v) in [(t, b), (t, n), (b, n)] {
+                assert!(u.dot(v).abs() < 1e-5);
+            }
+            assert!((t.length() - 1.0).abs() < 1e-5 && (b.length() - 1.0).abs() < 1e-5);
+            for _ in 0..100 {
+                let d = cosine_direction(n, &mut rng);
+                assert!(d.dot(n) >= -1e-6 && (d.length() - 1.0).abs() < 1e-5);
+            }
+        }
+    }
+}
