@@ -26,8 +26,11 @@ pub enum Command {
     Validate(ValidateArgs),
     /// Render one image of a scene with one accelerator and strategy, and print timings and statistics.
     Render(RenderArgs),
-    /// List scenes, accelerators, splits, traversal orders and strategies.
+    /// List scenes, accelerators and peer backends (with availability), splits, traversal orders and strategies.
     List,
+    /// Internal: time one configuration in a fresh process and print its timing line (used for Embree).
+    #[command(hide = true)]
+    Worker(WorkerArgs),
 }
 
 #[derive(Args, Debug)]
@@ -49,6 +52,21 @@ pub struct RunArgs {
     /// Exit with code 1 when a claim of the config fails.
     #[arg(long)]
     pub check_claims: bool,
+    /// Exit with code 2 when a backend the config names is unavailable (default: skip it and say so).
+    #[arg(long)]
+    pub require_all: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct WorkerArgs {
+    /// Experiment config (TOML).
+    pub config: PathBuf,
+    /// The configuration to time once.
+    #[arg(long)]
+    pub config_id: String,
+    /// Plan the [quick] version.
+    #[arg(long)]
+    pub quick: bool,
 }
 
 fn parse_shard(s: &str) -> Result<(usize, usize), String> {

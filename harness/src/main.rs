@@ -5,6 +5,7 @@ mod config;
 mod error;
 mod list;
 mod output;
+mod peers;
 mod plan;
 mod render;
 mod rows;
@@ -16,7 +17,7 @@ use std::process::ExitCode;
 use clap::Parser;
 use report::spec::Verdict;
 
-use cli::{Command, ReportArgs, RunArgs, ValidateArgs};
+use cli::{Command, ReportArgs, RunArgs, ValidateArgs, WorkerArgs};
 use config::Experiment;
 use error::Error;
 use plan::Plan;
@@ -28,6 +29,7 @@ fn main() -> ExitCode {
         Command::Report(args) => report_command(&args),
         Command::Validate(args) => validate_command(&args),
         Command::Render(args) => render::run(&args),
+        Command::Worker(args) => worker_command(&args),
         Command::List => {
             list::run();
             Ok(())
@@ -74,11 +76,40 @@ fn run_command(args: &RunArgs) -> Result<(), Error> {
             dir = dir.join(format!("shard-{i}-of-{n}"));
         }
     }
-    run::sweep(&exp, &plan, &dir, args.resume)?;
+    skip_unavailable(&exp, &mut plan, args.require_all)?;
+    let worker = run::WorkerCall { config: args.config.clone(), quick: args.quick };
+    run::sweep(&exp, &plan, &dir, args.resume, &worker)?;
     let failed = write_report(&dir, &exp, plan.notes.clone())?;
     if failed && args.check_claims {
         return Err(Error::Run("a claim failed (see the claims above and REPORT.md)".into()));
     }
+    Ok(())
+}
+
+/// Drops configurations whose backend cannot run here (Embree absent), with a note for the report; with
+/// `require_all` that is bad input instead.
+fn skip_unavailable(exp: &Experiment, plan: &mut Plan, require_all: bool) -> Result<(), Error> {
+    let needs = |i: usize| plan.configurations[i].settings.peer.is_some_and(|p| p.kind.needs_embree());
+    if !(0..plan.configurations.len()).any(needs) {
+        return Ok(());
+    }
+    let Err(e) = peers::embree_status() else { return Ok(()) };
+    if require_all {
+        return Err(Error::Input(format!("{}: accel embree/embree-packets: Embree 4 is unavailable: {e}", exp.path.display())));
+    }
+    let mut skipped: Vec<String> = plan.configurations.iter().enumerate().filter(|(i, _)| needs(*i)).map(|(_, c)| c.series.clone()).collect();
+    skipped.dedup();
+    plan.runs.retain(|r| !needs(r.config));
+    let note = format!("Embree 4 is unavailable, so these series were skipped: {}. {e}", skipped.join(", "));
+    eprintln!("note: {note}");
+    plan.notes.push(note);
+    Ok(())
+}
+
+fn worker_command(args: &WorkerArgs) -> Result<(), Error> {
+    let exp = load(&args.config, args.quick)?;
+    let plan = Plan::new(&exp, render::available_threads())?;
+    println!("{}", run::work(&plan, &args.config_id)?.to_line());
     Ok(())
 }
 

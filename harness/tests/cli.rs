@@ -41,7 +41,7 @@ fn bad_configs_exit_2_with_one_line_and_write_nothing() {
         ("unknown sweep key", "name = \"t\"\n[sweep]\nobects = [1]\n", "sweep.obects: unknown key (allowed: scene, objects,"),
         ("wrong type", "name = \"t\"\nrepetitions = \"five\"\n[sweep]\n", "repetitions: expected an integer in 1..=1000, found a string"),
         ("empty sweep", "name = \"t\"\n[sweep]\nobjects = []\n", "sweep.objects: empty list (give at least one value; allowed: integers"),
-        ("unknown accelerator", "name = \"t\"\n[sweep]\naccel = [\"bvh\", \"bhv\"]\n", "sweep.accel[1]: unknown value \"bhv\" (allowed: list, bvh, flat-bvh)"),
+        ("unknown accelerator", "name = \"t\"\n[sweep]\naccel = [\"bvh\", \"bhv\"]\n", "sweep.accel[1]: unknown value \"bhv\" (allowed: list, bvh, flat-bvh, obvhs-bvh2, obvhs-cwbvh, embree, embree-packets)"),
         ("zero threads", "name = \"t\"\n[sweep]\nthreads = [0]\n", "sweep.threads[0]: 0 is out of range (allowed: integers 1..=4096 or all)"),
         ("leaf size", "name = \"t\"\n[sweep]\nleaf_size = 17\n", "sweep.leaf_size[0]: 17 is out of range (allowed: integers 1..=16)"),
         ("missing sweep", "name = \"t\"\n", "missing [sweep] table"),

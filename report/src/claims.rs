@@ -33,15 +33,22 @@ pub fn check(rows: &Rows, spec: &ReportSpec, claim: &ClaimSpec) -> ClaimResult {
     let (series, than) = match &claim.kind {
         ClaimKind::Faster { series, than, .. } | ClaimKind::Within { series, than, .. } => (series, than),
     };
-    let points: Vec<Point> = if rows.is_numeric(&claim.metric) {
-        pool::ratio_points(spec, &rows.runs, than, series, "objects", &claim.metric)
-            .into_iter()
-            .filter(|p| claim.min_objects.is_none_or(|min| p.x >= min as f64))
-            .filter(|p| claim.max_objects.is_none_or(|max| p.x <= max as f64))
-            .collect()
-    } else {
-        Vec::new()
+    // Every point of every curve (a curve per thread count etc. when those vary within the series).
+    let in_range = |p: &Point| {
+        claim.min_objects.is_none_or(|min| p.x >= min as f64) && claim.max_objects.is_none_or(|max| p.x <= max as f64)
     };
+    let mut points: Vec<Point> = Vec::new();
+    let mut labels: Vec<String> = Vec::new();
+    let runs: Vec<crate::rows::Run> = rows.runs.iter().filter(|r| r.passes(&claim.filter)).cloned().collect();
+    if rows.is_numeric(&claim.metric) {
+        for curve in pool::ratio_curves(spec, &runs, than, series, "objects", &claim.metric) {
+            for point in curve.points.into_iter().filter(in_range) {
+                let fixed = if curve.fixed.is_empty() { String::new() } else { format!(" ({})", curve.fixed) };
+                labels.push(format!("{} objects{fixed}", point.x));
+                points.push(point);
+            }
+        }
+    }
     let mut result = ClaimResult {
         text: claim.text.clone(),
         verdict: Verdict::Inconclusive,
@@ -92,7 +99,8 @@ pub fn check(rows: &Rows, spec: &ReportSpec, claim: &ClaimSpec) -> ClaimResult {
                     };
                     // Distance of the interval's far and near ends from 1, negated: nearer is safer.
                     let far = (e.lo - 1.0).abs().max((e.hi - 1.0).abs());
-                    let near = if e.lo <= 1.0 && 1.0 <= e.hi { 0.0 } else { (e.lo - 1.0).abs().min((e.hi - 1.0).abs()) };
+                    let near =
+                        if e.lo <= 1.0 && 1.0 <= e.hi { 0.0 } else { (e.lo - 1.0).abs().min((e.hi - 1.0).abs()) };
                     (tolerance, (-near, -far), verdict)
                 }
             }
@@ -119,13 +127,13 @@ pub fn check(rows: &Rows, spec: &ReportSpec, claim: &ClaimSpec) -> ClaimResult {
     result.threshold = judged[worst].0;
     let counts = |v: Verdict| judged.iter().filter(|j| j.2 == v).count();
     result.detail = format!(
-        "{} point{} ({} hold, {} fail, {} inconclusive); least favourable at {} objects",
+        "{} point{} ({} hold, {} fail, {} inconclusive); least favourable at {}",
         points.len(),
         if points.len() == 1 { "" } else { "s" },
         counts(Verdict::Holds),
         counts(Verdict::Fails),
         counts(Verdict::Inconclusive),
-        point.x
+        labels[worst]
     );
     result
 }

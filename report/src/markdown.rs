@@ -16,6 +16,26 @@ pub fn report(rows: &Rows, spec: &ReportSpec, claims: &[ClaimResult]) -> String 
     if !spec.description.trim().is_empty() {
         let _ = writeln!(md, "{}\n", spec.description.trim());
     }
+    if !rows.failed.is_empty() {
+        md.push_str("## ⚠ VALIDATION FAILURES
+
+");
+        md.push_str("These configurations disagreed with the reference before timing and were **not timed**; their series lack these points.
+
+");
+        md.push_str("| series | accel | scene | objects | seed | workload | threads | rays disagreeing | reference |
+|---|---|---|---|---|---|---|---|---|
+");
+        for r in &rows.failed {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                r.series(), r.text("accel"), r.text("scene"), r.text("objects"), r.text("seed"), r.text("workload"),
+                r.text("threads"), r.text("mismatches"), r.text("validated_against")
+            );
+        }
+        md.push('\n');
+    }
     what_ran(&mut md, rows, spec);
     if !spec.notes.is_empty() {
         md.push_str("## Notes\n\n");
@@ -46,8 +66,7 @@ fn distinct(runs: &[Run], column: &str) -> String {
 fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     let runs = &rows.runs;
     let configs: BTreeSet<&str> = runs.iter().map(Run::config_id).collect();
-    let reps: Vec<usize> =
-        configs.iter().map(|id| runs.iter().filter(|r| r.config_id() == *id).count()).collect();
+    let reps: Vec<usize> = configs.iter().map(|id| runs.iter().filter(|r| r.config_id() == *id).count()).collect();
     let (rep_min, rep_max) = (reps.iter().min().unwrap_or(&0), reps.iter().max().unwrap_or(&0));
     let reps_text = if rep_min == rep_max { format!("{rep_min}") } else { format!("{rep_min}–{rep_max}") };
     let loads = pool::samples(runs, "load_avg_1m");
@@ -81,12 +100,8 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
         distinct(runs, "rustc"),
         distinct(runs, "harness_version")
     );
-    let _ = writeln!(
-        md,
-        "- Time: {} to {}",
-        stamps.first().copied().unwrap_or("?"),
-        stamps.last().copied().unwrap_or("?")
-    );
+    let _ =
+        writeln!(md, "- Time: {} to {}", stamps.first().copied().unwrap_or("?"), stamps.last().copied().unwrap_or("?"));
     md.push_str(
         "- Statistics: medians over repetitions (and seeds where pooled); intervals are 95% percentile-bootstrap \
          intervals of the median (or of the ratio of medians), 2000 resamples\n\n",
@@ -165,7 +180,9 @@ fn summary_table(md: &mut String, rows: &Rows, spec: &ReportSpec) {
         .filter(|c| runs.iter().map(|r| r.text(c)).collect::<BTreeSet<_>>().len() > 1)
         .collect();
     md.push_str("## Summary\n\n");
-    md.push_str("One row per configuration with seeds pooled; full per-configuration statistics are in `summary.csv`.\n\n");
+    md.push_str(
+        "One row per configuration with seeds pooled; full per-configuration statistics are in `summary.csv`.\n\n",
+    );
     let mut header = vec!["series".to_string()];
     header.extend(varying.iter().map(|c| c.to_string()));
     header.extend(["seeds", "n", "median total_s [95% CI]", "median Mrays/s"].map(String::from));

@@ -67,59 +67,90 @@ pub fn ratio_against(
     Some(stats::ratio_ci(&numerator, &denominator, stats::seed_for(key)))
 }
 
-/// The runs of `series`, grouped by the value of column `x` (ascending); runs with no numeric x are left out.
-pub fn by_x<'a>(runs: &'a [Run], series: &str, x: &str) -> Vec<(f64, Vec<&'a Run>)> {
-    let mut groups: Vec<(f64, Vec<&Run>)> = Vec::new();
-    for run in runs.iter().filter(|run| run.series() == series) {
+/// One line of a figure or one claim's set of points: a series, with any setting other than
+/// seed and x that varies within the series held fixed (so that, say, thread counts are never pooled).
+#[derive(Clone, Debug)]
+pub struct Curve {
+    /// The settings held fixed, e.g. `threads 4` (empty when only seeds and x vary).
+    pub fixed: String,
+    /// Points in ascending x.
+    pub points: Vec<Point>,
+}
+
+/// The runs of `series` split into curves (see [`Curve`]), each grouped by x value (ascending).
+/// Runs without a numeric x are left out.
+fn curves_of<'a>(runs: &'a [Run], series: &str, x: &str) -> Vec<(String, Vec<(f64, Vec<&'a Run>)>)> {
+    let own: Vec<&Run> = runs.iter().filter(|r| r.series() == series && r.num(x).is_finite()).collect();
+    let varying: Vec<&str> = SETTINGS
+        .iter()
+        .copied()
+        .filter(|c| *c != "seed" && *c != x)
+        .filter(|c| own.iter().any(|r| r.text(c) != own[0].text(c)))
+        .collect();
+    let mut curves: Vec<(String, Vec<(f64, Vec<&Run>)>)> = Vec::new();
+    for run in own {
+        let fixed = varying.iter().map(|c| format!("{c} {}", run.text(c))).collect::<Vec<_>>().join(", ");
+        let index = match curves.iter().position(|(f, _)| *f == fixed) {
+            Some(index) => index,
+            None => {
+                curves.push((fixed, Vec::new()));
+                curves.len() - 1
+            }
+        };
+        let groups = &mut curves[index].1;
         let value = run.num(x);
-        if !value.is_finite() {
-            continue;
-        }
         match groups.iter_mut().find(|(v, _)| *v == value) {
             Some((_, group)) => group.push(run),
             None => groups.push((value, vec![run])),
         }
     }
-    groups.sort_by(|a, b| a.0.total_cmp(&b.0));
-    groups
+    for (_, groups) in &mut curves {
+        groups.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    curves
 }
 
 fn max_threads(group: &[&Run]) -> f64 {
     group.iter().map(|run| run.num("threads")).fold(f64::NAN, f64::max)
 }
 
-/// Points of `metric` against `x` for one series, pooled over every other setting.
-pub fn metric_points(runs: &[Run], series: &str, x: &str, metric: &str) -> Vec<Point> {
-    by_x(runs, series, x)
+/// Curves of `metric` against `x` for one series, each point pooled over seeds.
+pub fn metric_curves(runs: &[Run], series: &str, x: &str, metric: &str) -> Vec<Curve> {
+    curves_of(runs, series, x)
         .into_iter()
-        .filter_map(|(xv, group)| {
-            let values = samples(group.iter().copied(), metric);
-            if values.is_empty() {
-                return None;
-            }
-            let key = format!("{series}|{x}={xv}|{metric}");
-            let estimate = stats::median_ci(&values, stats::seed_for(&key));
-            Some(Point { x: xv, estimate, threads: max_threads(&group) })
+        .map(|(fixed, groups)| {
+            let points = groups
+                .into_iter()
+                .filter_map(|(xv, group)| {
+                    let values = samples(group.iter().copied(), metric);
+                    if values.is_empty() {
+                        return None;
+                    }
+                    let key = format!("{series}|{fixed}|{x}={xv}|{metric}");
+                    let estimate = stats::median_ci(&values, stats::seed_for(&key));
+                    Some(Point { x: xv, estimate, threads: max_threads(&group) })
+                })
+                .collect();
+            Curve { fixed, points }
         })
         .collect()
 }
 
-/// Points of `metric(other) / metric(series)` against `x`, each pooled over seeds and every other
-/// setting; `other`'s samples at a point are the counterparts of the series' runs there, seeds ignored.
-pub fn ratio_points(
-    spec: &ReportSpec,
-    runs: &[Run],
-    other: &str,
-    series: &str,
-    x: &str,
-    metric: &str,
-) -> Vec<Point> {
-    by_x(runs, series, x)
+/// Curves of `metric(other) / metric(series)` against `x`, each point pooled over seeds; `other`'s
+/// samples at a point are the counterparts (see [`matches`]) of the series' runs there, seeds ignored.
+pub fn ratio_curves(spec: &ReportSpec, runs: &[Run], other: &str, series: &str, x: &str, metric: &str) -> Vec<Curve> {
+    curves_of(runs, series, x)
         .into_iter()
-        .filter_map(|(xv, group)| {
-            let key = format!("{other}/{series}|{x}={xv}|{metric}");
-            let estimate = ratio_against(spec, runs, other, &group, metric, &["seed"], &key)?;
-            Some(Point { x: xv, estimate, threads: max_threads(&group) })
+        .map(|(fixed, groups)| {
+            let points = groups
+                .into_iter()
+                .filter_map(|(xv, group)| {
+                    let key = format!("{other}/{series}|{fixed}|{x}={xv}|{metric}");
+                    let estimate = ratio_against(spec, runs, other, &group, metric, &["seed"], &key)?;
+                    Some(Point { x: xv, estimate, threads: max_threads(&group) })
+                })
+                .collect();
+            Curve { fixed, points }
         })
         .collect()
 }

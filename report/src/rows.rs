@@ -8,28 +8,82 @@ use polars::prelude::*;
 
 use crate::error::Error;
 
-/// Setting columns (ROWS.md: `scene` … `workload`); a configuration is series + these.
-pub const SETTINGS: [&str; 14] = [
-    "scene", "objects", "seed", "accel", "split", "leaf_size", "sah_bins", "traversal", "strategy", "threads",
-    "width", "height", "max_depth", "workload",
+/// Setting columns (ROWS.md: `scene` … `embree_isa`); a configuration is series + these.
+pub const SETTINGS: [&str; 17] = [
+    "scene",
+    "objects",
+    "seed",
+    "accel",
+    "split",
+    "leaf_size",
+    "sah_bins",
+    "traversal",
+    "strategy",
+    "threads",
+    "width",
+    "height",
+    "max_depth",
+    "workload",
+    "obvhs_build",
+    "embree_build",
+    "embree_isa",
 ];
+
+/// Text columns added after the first row format; absent in older files.
+const OPTIONAL_TEXT: [&str; 6] = ["obvhs_build", "embree_build", "embree_isa", "validation", "validated_against", "peer_info"];
 
 /// Columns read as text even when every value looks like a number (hashes, commits, labels).
 const TEXT: [&str; 16] = [
-    "experiment", "config_id", "series", "scene", "accel", "split", "traversal", "strategy", "workload",
-    "image_hash", "scene_fingerprint", "git_commit", "rustc", "cpu_model", "timestamp", "harness_version",
+    "experiment",
+    "config_id",
+    "series",
+    "scene",
+    "accel",
+    "split",
+    "traversal",
+    "strategy",
+    "workload",
+    "image_hash",
+    "scene_fingerprint",
+    "git_commit",
+    "rustc",
+    "cpu_model",
+    "timestamp",
+    "harness_version",
 ];
 
 /// Integer columns.
 const INTEGER: [&str; 15] = [
-    "repetition", "objects", "seed", "leaf_size", "sah_bins", "threads", "width", "height", "max_depth", "rays",
-    "tree_nodes", "tree_leaves", "tree_depth", "tree_bytes", "logical_cores",
+    "repetition",
+    "objects",
+    "seed",
+    "leaf_size",
+    "sah_bins",
+    "threads",
+    "width",
+    "height",
+    "max_depth",
+    "rays",
+    "tree_nodes",
+    "tree_leaves",
+    "tree_depth",
+    "tree_bytes",
+    "logical_cores",
 ];
 
 /// Float columns.
 const FLOAT: [&str; 11] = [
-    "scene_s", "build_s", "trace_s", "encode_s", "total_s", "mrays_per_s", "nodes_per_ray", "box_tests_per_ray",
-    "prim_tests_per_ray", "sah_cost", "load_avg_1m",
+    "scene_s",
+    "build_s",
+    "trace_s",
+    "encode_s",
+    "total_s",
+    "mrays_per_s",
+    "nodes_per_ray",
+    "box_tests_per_ray",
+    "prim_tests_per_ray",
+    "sah_cost",
+    "load_avg_1m",
 ];
 
 /// One recorded repetition: every column as text, numeric columns also as numbers.
@@ -40,6 +94,12 @@ pub struct Run {
 }
 
 impl Run {
+    /// True when the run's setting columns take one of the allowed values for every filter entry.
+    pub fn passes(&self, filter: &[(String, Vec<String>)]) -> bool {
+        let threads_all = |column: &str, a: &str| column == "threads" && a == "all" && self.text(column) == self.text("logical_cores");
+        filter.iter().all(|(column, allowed)| allowed.iter().any(|a| a == self.text(column) || threads_all(column, a)))
+    }
+
     /// A column's value as text (`""` when absent or null).
     pub fn text(&self, column: &str) -> &str {
         self.text.get(column).map_or("", String::as_str)
@@ -67,6 +127,8 @@ pub struct Rows {
     pub frame: DataFrame,
     /// The same rows, one `Run` each, in file order.
     pub runs: Vec<Run>,
+    /// Rows of configurations that failed validation (never timed; kept out of `frame` and `runs`).
+    pub failed: Vec<Run>,
 }
 
 impl Rows {
@@ -84,7 +146,8 @@ pub fn read(path: &Path) -> Result<Rows, Error> {
             return Err(Error::MissingColumn { path: path.into(), column: column.to_string() });
         }
     }
-    let schema: Schema = header.iter().filter_map(|name| Some(Field::new(name.as_str().into(), dtype_of(name)?))).collect();
+    let schema: Schema =
+        header.iter().filter_map(|name| Some(Field::new(name.as_str().into(), dtype_of(name)?))).collect();
     let frame = CsvReadOptions::default()
         .with_has_header(true)
         .with_schema_overwrite(Some(Arc::new(schema)))
@@ -94,8 +157,20 @@ pub fn read(path: &Path) -> Result<Rows, Error> {
     if frame.height() == 0 {
         return Err(Error::NoRows { path: path.into() });
     }
+    let mut frame = frame;
+    for column in OPTIONAL_TEXT.iter().filter(|c| !header.iter().any(|h| h == *c)) {
+        let filler = Column::new((*column).into(), vec!["-"; frame.height()]);
+        frame.with_column(filler).map_err(|e| Error::read(path, e))?;
+    }
+    let (frame, failed) = if header.iter().any(|h| h == "validation") {
+        let is_failed = frame.column("validation").and_then(|c| c.str().map(|s| s.equal("FAILED"))).map_err(|e| Error::read(path, e))?;
+        let failed = frame.filter(&is_failed).and_then(|f| to_runs(&f)).map_err(|e| Error::read(path, e))?;
+        (frame.filter(&!is_failed).map_err(|e| Error::read(path, e))?, failed)
+    } else {
+        (frame, Vec::new())
+    };
     let runs = to_runs(&frame).map_err(|e| Error::read(path, e))?;
-    Ok(Rows { frame, runs })
+    Ok(Rows { frame, runs, failed })
 }
 
 /// The column names in the first line of the file.
@@ -107,12 +182,14 @@ fn read_header(path: &Path) -> Result<Vec<String>, Error> {
 
 /// The type ROWS.md gives a column; `None` for columns it does not know (inferred).
 fn dtype_of(column: &str) -> Option<DataType> {
-    if TEXT.contains(&column) {
+    if TEXT.contains(&column) || OPTIONAL_TEXT.contains(&column) {
         Some(DataType::String)
     } else if INTEGER.contains(&column) {
         Some(DataType::Int64)
     } else if FLOAT.contains(&column) {
         Some(DataType::Float64)
+    } else if column == "mismatches" {
+        Some(DataType::Int64)
     } else if column == "git_dirty" {
         Some(DataType::Boolean)
     } else {

@@ -55,6 +55,8 @@ pub struct PlotSpec {
     pub log_y: bool,
     /// Series to draw (empty: all).
     pub series: Vec<String>,
+    /// Only runs whose setting column takes one of the listed values (e.g. `workload = primary`).
+    pub filter: Vec<(String, Vec<String>)>,
 }
 
 /// One `[[claim]]` table.
@@ -72,6 +74,8 @@ pub struct ClaimSpec {
     pub min_objects: Option<u64>,
     /// Only points with at most this many objects.
     pub max_objects: Option<u64>,
+    /// Only runs whose setting column takes one of the listed values.
+    pub filter: Vec<(String, Vec<String>)>,
 }
 
 /// The comparison a claim makes; ratios are `metric(than) / metric(series)`.

@@ -13,8 +13,15 @@ pub const METRICS: [&str; 4] = ["total_s", "trace_s", "build_s", "mrays_per_s"];
 
 /// Columns equal in every repetition of a configuration, carried from the first one.
 const DETERMINISTIC: [&str; 9] = [
-    "rays", "nodes_per_ray", "box_tests_per_ray", "prim_tests_per_ray", "tree_nodes", "tree_depth", "tree_bytes",
-    "sah_cost", "image_hash",
+    "rays",
+    "nodes_per_ray",
+    "box_tests_per_ray",
+    "prim_tests_per_ray",
+    "tree_nodes",
+    "tree_depth",
+    "tree_bytes",
+    "sah_cost",
+    "image_hash",
 ];
 
 /// Statistics per metric, in column order (`<metric>_<stat>`).
@@ -34,8 +41,7 @@ pub fn summarise(rows: &Rows, spec: &ReportSpec) -> PolarsResult<DataFrame> {
     aggs.extend(DETERMINISTIC.iter().map(|c| col(*c).first()));
     let mut frame = rows.frame.clone().lazy().group_by_stable([col("config_id")]).agg(aggs).collect()?;
 
-    let ids: Vec<String> =
-        frame.column("config_id")?.str()?.iter().map(|id| id.unwrap_or("").to_string()).collect();
+    let ids: Vec<String> = frame.column("config_id")?.str()?.iter().map(|id| id.unwrap_or("").to_string()).collect();
     let groups: Vec<Vec<&Run>> =
         ids.iter().map(|id| rows.runs.iter().filter(|run| run.config_id() == id).collect()).collect();
 

@@ -22,7 +22,7 @@ fn golden_rows() -> String {
 }
 
 fn claim(text: &str, kind: ClaimKind, min_objects: Option<u64>) -> ClaimSpec {
-    ClaimSpec { text: text.into(), paper: None, kind, metric: "total_s".into(), min_objects, max_objects: None }
+    ClaimSpec { text: text.into(), paper: None, kind, metric: "total_s".into(), min_objects, max_objects: None, filter: vec![] }
 }
 
 fn faster(factor: f64, per_thread: bool) -> ClaimKind {
@@ -39,6 +39,7 @@ fn plot(file: &str, title: &str, kind: PlotKind, x: &str, log: bool) -> PlotSpec
         log_x: log,
         log_y: log,
         series: vec![],
+        filter: vec![],
     }
 }
 
@@ -238,4 +239,36 @@ fn errors_name_the_file() {
     let err = report::write(&dir, &spec()).unwrap_err().to_string();
     assert!(err.contains("runs.csv") && err.contains("`seed`"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn failed_validation_is_excluded_and_announced_and_filters_narrow_plots() {
+    // Add a validation column: every row exact except one extra row of a configuration that failed.
+    let golden = golden_rows();
+    let mut lines = golden.lines();
+    let mut text = format!("{},validation,mismatches\n", lines.next().unwrap());
+    for line in lines.clone() {
+        text.push_str(&format!("{line},exact,0\n"));
+    }
+    let first = lines.next().unwrap();
+    let failed = first.replacen("0000000000001000", "00000000000bad00", 1).replacen(",10,1,list,", ",10,9,list,", 1);
+    text.push_str(&format!("{failed},FAILED,17\n"));
+    let dir = run_dir("failed", &text);
+    let mut spec = spec();
+    // A metric plot restricted to 100 objects: its curve has one x value only.
+    spec.plots[0].filter = vec![("objects".into(), vec!["100".into()])];
+    report::write(&dir, &spec).unwrap();
+    let summary = read_summary(&dir);
+    assert_eq!(summary.len(), 8, "the failed configuration has no summary row");
+    assert!(!summary.contains_key("00000000000bad00"));
+    let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
+    assert!(md.contains("VALIDATION FAILURES"), "announced loudly");
+    assert!(md.contains("| serial·list | list | random-spheres | 10 | 9 | primary | 1 | 17 |"), "{md}");
+    let svg = std::fs::read_to_string(dir.join("figures/total_vs_objects.svg")).unwrap();
+    let unfiltered = run_dir("unfiltered", &golden);
+    report::write(&unfiltered, &self::spec()).unwrap();
+    let all = std::fs::read_to_string(unfiltered.join("figures/total_vs_objects.svg")).unwrap();
+    assert!(svg.matches("<polyline").count() < all.matches("<polyline").count(), "the filter drops the 10-object points");
+    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::remove_dir_all(&unfiltered).unwrap();
 }

@@ -4,7 +4,10 @@ use std::fmt;
 
 use tracer::accel::{AccelKind, Split, Traversal};
 use tracer::executor::StrategyKind;
+use tracer::rays::RayKind;
 use tracer::scene::SceneKind;
+
+use crate::peers::{EmbreeQuality, ObvhsQuality, PeerKind};
 
 /// One setting of a run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -23,6 +26,9 @@ pub enum Axis {
     Height,
     MaxDepth,
     Workload,
+    ObvhsBuild,
+    EmbreeBuild,
+    EmbreeIsa,
 }
 
 /// A value on an axis: a number or one of the axis's names.
@@ -46,18 +52,29 @@ impl fmt::Display for Value {
 pub enum Workload {
     /// Full Whitted shading and PNG encoding.
     Render,
-    /// The closest-hit primary-ray kernel.
-    Primary,
+    /// One fixed ray set (primary, shadow or diffuse rays), the same for every backend.
+    Rays(RayKind),
 }
 
 impl Workload {
-    pub const ALL: [Workload; 2] = [Workload::Render, Workload::Primary];
+    pub const ALL: [Workload; 4] =
+        [Workload::Render, Workload::Rays(RayKind::Primary), Workload::Rays(RayKind::Shadow), Workload::Rays(RayKind::Diffuse)];
     pub fn name(self) -> &'static str {
         match self {
             Workload::Render => "render",
-            Workload::Primary => "primary",
+            Workload::Rays(k) => k.name(),
         }
     }
+}
+
+/// Instruction sets a config may pin for Embree (`default` lets Embree choose).
+pub const EMBREE_ISAS: [&str; 6] = ["default", "sse2", "sse4.2", "avx", "avx2", "avx512"];
+
+/// Every accelerator name: the tracer's structures, then the peers.
+pub fn accel_names() -> Vec<&'static str> {
+    let mut v = names(&AccelKind::ALL, AccelKind::name);
+    v.extend(PeerKind::ALL.iter().map(|p| p.name()));
+    v
 }
 
 /// The scene names a config may use: the generators and `sphere-file`.
@@ -69,7 +86,7 @@ fn names<T: Copy>(all: &[T], name: fn(T) -> &'static str) -> Vec<&'static str> {
 
 impl Axis {
     /// Every axis, in row-column order.
-    pub const ALL: [Axis; 14] = [
+    pub const ALL: [Axis; 17] = [
         Axis::Scene,
         Axis::Objects,
         Axis::Seed,
@@ -84,6 +101,9 @@ impl Axis {
         Axis::Height,
         Axis::MaxDepth,
         Axis::Workload,
+        Axis::ObvhsBuild,
+        Axis::EmbreeBuild,
+        Axis::EmbreeIsa,
     ];
 
     /// The config key and row column.
@@ -103,6 +123,9 @@ impl Axis {
             Axis::Height => "height",
             Axis::MaxDepth => "max_depth",
             Axis::Workload => "workload",
+            Axis::ObvhsBuild => "obvhs_build",
+            Axis::EmbreeBuild => "embree_build",
+            Axis::EmbreeIsa => "embree_isa",
         }
     }
 
@@ -119,12 +142,15 @@ impl Axis {
                 v.push(SPHERE_FILE);
                 v
             }
-            Axis::Accel => names(&AccelKind::ALL, AccelKind::name),
+            Axis::Accel => accel_names(),
             Axis::Split => names(&Split::ALL, Split::name),
             Axis::Traversal => names(&Traversal::ALL, Traversal::name),
             Axis::Strategy => names(&StrategyKind::ALL, StrategyKind::name),
             Axis::Workload => names(&Workload::ALL, Workload::name),
             Axis::Threads => vec!["all"],
+            Axis::ObvhsBuild => names(&ObvhsQuality::ALL, ObvhsQuality::name),
+            Axis::EmbreeBuild => names(&EmbreeQuality::ALL, EmbreeQuality::name),
+            Axis::EmbreeIsa => EMBREE_ISAS.to_vec(),
             _ => vec![],
         }
     }
@@ -187,6 +213,9 @@ impl Axis {
             Axis::Height => Value::Int(240),
             Axis::MaxDepth => Value::Int(3),
             Axis::Workload => Value::Name(Workload::Render.name()),
+            Axis::ObvhsBuild => Value::Name(ObvhsQuality::default().name()),
+            Axis::EmbreeBuild => Value::Name(EmbreeQuality::default().name()),
+            Axis::EmbreeIsa => Value::Name(EMBREE_ISAS[0]),
         }
     }
 }

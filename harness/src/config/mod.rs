@@ -105,6 +105,16 @@ fn axis_values(s: &Section<'_>, skip: &[&str]) -> Result<AxisValues, Error> {
     Ok(out)
 }
 
+/// A `where = { axis = value or [values] }` table: the runs a plot or claim looks at, as row text.
+fn filter(s: &Section<'_>) -> Result<Vec<(String, Vec<String>)>, Error> {
+    let Some(w) = s.section("where")? else { return Ok(vec![]) };
+    let axes = axis_values(&w, &[])?;
+    Ok(axes
+        .into_iter()
+        .map(|(axis, values)| (axis.key().to_string(), values.iter().map(|v| v.to_string()).collect()))
+        .collect())
+}
+
 impl Experiment {
     /// Reads and checks the config at `path`.
     pub fn load(path: &Path) -> Result<Self, Error> {
@@ -181,7 +191,7 @@ impl Experiment {
 
         let mut plots = Vec::new();
         for p in top.sections("plot")? {
-            p.only(&["file", "title", "kind", "x", "y", "log_x", "log_y", "series"])?;
+            p.only(&["file", "title", "kind", "x", "y", "log_x", "log_y", "series", "where"])?;
             let file = p.required_string("file")?.to_string();
             if file.is_empty() || !file.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_') {
                 return Err(p.error("file", format!("{file:?} is not a valid file stem (allowed: letters, digits, '-', '_')")));
@@ -209,12 +219,13 @@ impl Experiment {
             }
             let title = p.string("title")?.unwrap_or(&file).to_string();
             let (log_x, log_y) = (p.boolean("log_x")?.unwrap_or(false), p.boolean("log_y")?.unwrap_or(false));
-            plots.push(PlotSpec { file, title, kind, x, y, log_x, log_y, series });
+            let filter = filter(&p)?;
+            plots.push(PlotSpec { file, title, kind, x, y, log_x, log_y, series, filter });
         }
 
         let mut claims = Vec::new();
         for c in top.sections("claim")? {
-            c.only(&["text", "paper", "kind", "series", "than", "factor", "per_thread", "tolerance", "metric", "min_objects", "max_objects"])?;
+            c.only(&["text", "paper", "kind", "series", "than", "factor", "per_thread", "tolerance", "metric", "min_objects", "max_objects", "where"])?;
             let text = c.required_string("text")?.to_string();
             let series = c.required_string("series")?.to_string();
             let than = c.required_string("than")?.to_string();
@@ -247,6 +258,7 @@ impl Experiment {
                 metric,
                 min_objects: objects("min_objects")?,
                 max_objects: objects("max_objects")?,
+                filter: filter(&c)?,
             });
         }
 

@@ -19,10 +19,7 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
-pub use self::embree::{
-    DeviceInfo, EmbreeConfig, EmbreeDevice, EmbreeError, EmbreeLibrary, EmbreeQuality, EmbreeSpheres,
-    EmbreeUnavailable,
-};
+pub use self::embree::{EmbreeConfig, EmbreeDevice, EmbreeLibrary, EmbreeQuality, EmbreeSpheres, EmbreeUnavailable};
 pub use self::obvhs::{ObvhsBvh2, ObvhsCwbvh, ObvhsQuality};
 
 /// Which peer backend to run.

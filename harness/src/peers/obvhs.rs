@@ -25,52 +25,52 @@ use tracer::geometry::{Ray, Sphere};
 #[serde(rename_all = "kebab-case")]
 pub enum ObvhsQuality {
     /// `BvhBuildParams::fastest_build()`.
-    FastestBuild,
+    Fastest,
     /// `BvhBuildParams::very_fast_build()`.
-    VeryFastBuild,
+    VeryFast,
     /// `BvhBuildParams::fast_build()`.
-    FastBuild,
+    Fast,
     /// `BvhBuildParams::medium_build()` ("around Embree's build time, faster traversal").
     #[default]
-    MediumBuild,
+    Medium,
     /// `BvhBuildParams::slow_build()`.
-    SlowBuild,
+    Slow,
     /// `BvhBuildParams::very_slow_build()`.
-    VerySlowBuild,
+    VerySlow,
 }
 
 impl ObvhsQuality {
     /// Every preset, fastest build first.
     pub const ALL: [ObvhsQuality; 6] = [
-        ObvhsQuality::FastestBuild,
-        ObvhsQuality::VeryFastBuild,
-        ObvhsQuality::FastBuild,
-        ObvhsQuality::MediumBuild,
-        ObvhsQuality::SlowBuild,
-        ObvhsQuality::VerySlowBuild,
+        ObvhsQuality::Fastest,
+        ObvhsQuality::VeryFast,
+        ObvhsQuality::Fast,
+        ObvhsQuality::Medium,
+        ObvhsQuality::Slow,
+        ObvhsQuality::VerySlow,
     ];
 
     /// The kebab-case name used in configs.
     pub fn name(self) -> &'static str {
         match self {
-            ObvhsQuality::FastestBuild => "fastest-build",
-            ObvhsQuality::VeryFastBuild => "very-fast-build",
-            ObvhsQuality::FastBuild => "fast-build",
-            ObvhsQuality::MediumBuild => "medium-build",
-            ObvhsQuality::SlowBuild => "slow-build",
-            ObvhsQuality::VerySlowBuild => "very-slow-build",
+            ObvhsQuality::Fastest => "fastest",
+            ObvhsQuality::VeryFast => "very-fast",
+            ObvhsQuality::Fast => "fast",
+            ObvhsQuality::Medium => "medium",
+            ObvhsQuality::Slow => "slow",
+            ObvhsQuality::VerySlow => "very-slow",
         }
     }
 
     /// The preset's build parameters.
     pub fn params(self) -> BvhBuildParams {
         match self {
-            ObvhsQuality::FastestBuild => BvhBuildParams::fastest_build(),
-            ObvhsQuality::VeryFastBuild => BvhBuildParams::very_fast_build(),
-            ObvhsQuality::FastBuild => BvhBuildParams::fast_build(),
-            ObvhsQuality::MediumBuild => BvhBuildParams::medium_build(),
-            ObvhsQuality::SlowBuild => BvhBuildParams::slow_build(),
-            ObvhsQuality::VerySlowBuild => BvhBuildParams::very_slow_build(),
+            ObvhsQuality::Fastest => BvhBuildParams::fastest_build(),
+            ObvhsQuality::VeryFast => BvhBuildParams::very_fast_build(),
+            ObvhsQuality::Fast => BvhBuildParams::fast_build(),
+            ObvhsQuality::Medium => BvhBuildParams::medium_build(),
+            ObvhsQuality::Slow => BvhBuildParams::slow_build(),
+            ObvhsQuality::VerySlow => BvhBuildParams::very_slow_build(),
         }
     }
 }
@@ -269,7 +269,7 @@ mod tests {
     #[test]
     fn bvh2_agrees_with_brute_force() {
         for (label, spheres, rays) in scenes() {
-            for quality in [ObvhsQuality::FastestBuild, ObvhsQuality::MediumBuild, ObvhsQuality::VerySlowBuild] {
+            for quality in [ObvhsQuality::Fastest, ObvhsQuality::Medium, ObvhsQuality::VerySlow] {
                 let accel = ObvhsBvh2::build(&spheres, quality);
                 assert_agrees(&format!("obvhs-bvh2 {} {label}", quality.name()), &accel, &spheres, &rays, Tolerance::Exact);
             }
@@ -279,7 +279,7 @@ mod tests {
     #[test]
     fn cwbvh_agrees_with_brute_force() {
         for (label, spheres, rays) in scenes() {
-            for quality in [ObvhsQuality::FastestBuild, ObvhsQuality::MediumBuild, ObvhsQuality::VerySlowBuild] {
+            for quality in [ObvhsQuality::Fastest, ObvhsQuality::Medium, ObvhsQuality::VerySlow] {
                 let accel = ObvhsCwbvh::build(&spheres, quality);
                 assert_agrees(&format!("obvhs-cwbvh {} {label}", quality.name()), &accel, &spheres, &rays, Tolerance::Exact);
             }
@@ -289,8 +289,8 @@ mod tests {
     #[test]
     fn hits_map_back_to_scene_indices_and_stats_are_sane() {
         let spheres: Vec<Sphere> = tracer::scene::SceneKind::RandomSpheres.generate(500, 3).spheres;
-        let bvh2 = ObvhsBvh2::build(&spheres, ObvhsQuality::MediumBuild);
-        let cw = ObvhsCwbvh::build(&spheres, ObvhsQuality::MediumBuild);
+        let bvh2 = ObvhsBvh2::build(&spheres, ObvhsQuality::Medium);
+        let cw = ObvhsCwbvh::build(&spheres, ObvhsQuality::Medium);
         for (i, s) in spheres.iter().enumerate().step_by(7) {
             // A ray from outside straight at the center: the first sphere hit must be a real one at that t.
             let origin = s.center + Vec3::new(0.0, 0.0, 100.0);
@@ -304,5 +304,13 @@ mod tests {
             assert!(st.nodes > 0 && st.leaves > 0 && st.depth > 0 && st.bytes > spheres.len() * 16, "{st:?}");
         }
         assert!(bvh2.stats().sah_cost > 0.0);
+    }
+
+    #[test]
+    fn quality_names_are_the_serde_names() {
+        for q in ObvhsQuality::ALL {
+            let toml = toml::to_string(&std::collections::BTreeMap::from([("quality", q)])).unwrap();
+            assert_eq!(toml.trim(), format!("quality = \"{}\"", q.name()));
+        }
     }
 }

@@ -67,11 +67,11 @@ fn primary_ray_throughput() {
         report("flat-bvh", t.elapsed().as_secs_f64(), mrays(&camera, &flat, reps));
         drop(flat);
         let t = Instant::now();
-        let b2 = ObvhsBvh2::build(&scene.spheres, ObvhsQuality::MediumBuild);
+        let b2 = ObvhsBvh2::build(&scene.spheres, ObvhsQuality::Medium);
         report("obvhs-bvh2", t.elapsed().as_secs_f64(), mrays(&camera, &b2, reps));
         drop(b2);
         let t = Instant::now();
-        let cw = ObvhsCwbvh::build(&scene.spheres, ObvhsQuality::MediumBuild);
+        let cw = ObvhsCwbvh::build(&scene.spheres, ObvhsQuality::Medium);
         report("obvhs-cwbvh", t.elapsed().as_secs_f64(), mrays(&camera, &cw, reps));
         drop(cw);
         if let Some(d) = &device {

@@ -1,5 +1,7 @@
 //! Test helpers for the peers: scenes, a ray mix like the renderers' and the agreement check against brute force.
 
+use std::io::Write;
+
 use tracer::Vec3;
 use tracer::accel::{Accelerator, Hit, List};
 use tracer::counters::NoCounters;
@@ -126,8 +128,8 @@ pub fn same_hit(spheres: &[Sphere], ray: &Ray, want: Option<Hit>, got: Option<Hi
     }
 }
 
-/// Relative distance of the line within which f32 cannot tell a tangent hit from a miss: `|perp / r - 1|`.
-pub const GRAZING: f64 = 1e-6;
+/// How near tangent (`|perp / r - 1|`, about two f32 ulps of the radius) f32 cannot tell a hit from a miss.
+pub const GRAZING: f64 = 2.5e-7;
 
 /// How far from tangent the ray's line passes sphere `s`, `|perp / r - 1|` in f64, if it grazes it ahead of
 /// the origin within [`GRAZING`].
@@ -193,7 +195,8 @@ pub fn embree_device(test: &str) -> Option<EmbreeDevice> {
         Ok(_) => Some(EmbreeDevice::new(&EmbreeConfig { threads: Some(2), ..EmbreeConfig::default() }).expect("Embree device")),
         Err(e) if required => panic!("{test}: BVHLAB_REQUIRE_EMBREE=1 but {e}"),
         Err(e) => {
-            eprintln!("{test}: skipped: {e}");
+            // Straight to stderr, past libtest's output capture, so the skip is always visible.
+            let _ = writeln!(std::io::stderr(), "{test}: skipped: {e}");
             None
         }
     }

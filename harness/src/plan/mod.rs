@@ -17,7 +17,8 @@ use tracer::executor::{Strategy, StrategyKind};
 use tracer::fingerprint::Fnv64;
 use tracer::scene::{Scene, SceneKind, sphere_file};
 
-use crate::config::axes::{Axis, SPHERE_FILE, Value, Workload};
+use crate::config::axes::{Axis, EMBREE_ISAS, SPHERE_FILE, Value, Workload};
+use crate::peers::{EmbreeQuality, ObvhsQuality, PeerKind};
 use crate::config::{Experiment, Series};
 use crate::error::Error;
 
@@ -30,13 +31,26 @@ pub enum SceneSource {
     File(Arc<Scene>),
 }
 
+/// A peer backend and its build settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PeerSettings {
+    pub kind: PeerKind,
+    pub obvhs: ObvhsQuality,
+    pub embree: EmbreeQuality,
+    /// `None`: Embree picks its best instruction set.
+    pub isa: Option<&'static str>,
+}
+
 /// Every setting of one configuration, typed and normalized.
 #[derive(Clone, Debug)]
 pub struct Settings {
     pub scene: SceneSource,
     pub objects: usize,
     pub seed: u64,
+    /// The tracer's structure (ignored when `peer` is set).
     pub accel: AccelParams,
+    /// A peer backend instead of the tracer's structure.
+    pub peer: Option<PeerSettings>,
     pub strategy: Strategy,
     pub width: u32,
     pub height: u32,
@@ -53,9 +67,14 @@ impl Settings {
         }
     }
 
-    /// True when the accelerator is a tree (tree settings apply).
+    /// True when the accelerator is one of the tracer's trees (tree settings apply).
     pub fn is_tree(&self) -> bool {
-        self.accel.kind != AccelKind::List
+        self.peer.is_none() && self.accel.kind != AccelKind::List
+    }
+
+    /// The accelerator's name as in rows.
+    pub fn accel_name(&self) -> &'static str {
+        self.peer.map_or(self.accel.kind.name(), |p| p.kind.name())
     }
 
     /// The row values of the axes, in [`Axis::ALL`] order; settings that do not apply are `-` or `0`.
@@ -66,7 +85,7 @@ impl Settings {
             self.scene_name().to_string(),
             self.objects.to_string(),
             self.seed.to_string(),
-            self.accel.kind.name().to_string(),
+            self.accel_name().to_string(),
             na(tree, self.accel.bvh.split.name().into(), "-"),
             na(tree, self.accel.bvh.max_leaf_size.to_string(), "0"),
             na(tree && self.accel.bvh.split == Split::BinnedSah, self.accel.bvh.sah_bins.to_string(), "0"),
@@ -77,6 +96,9 @@ impl Settings {
             self.height.to_string(),
             self.max_depth.to_string(),
             self.workload.name().to_string(),
+            self.peer.filter(|p| !p.kind.needs_embree()).map_or("-".into(), |p| p.obvhs.name().to_string()),
+            self.peer.filter(|p| p.kind.needs_embree()).map_or("-".into(), |p| p.embree.name().to_string()),
+            self.peer.filter(|p| p.kind.needs_embree()).map_or("-".into(), |p| p.isa.unwrap_or(EMBREE_ISAS[0]).to_string()),
         ]
     }
 }
@@ -127,9 +149,16 @@ fn find<T: Copy>(all: &[T], name: fn(T) -> &'static str, n: &str) -> T {
 /// Builds settings from one value per axis (in [`Axis::ALL`] order).
 fn settings(values: &[Value], cores: usize, file_scene: &Option<Arc<Scene>>) -> Settings {
     let get = |a: Axis| &values[Axis::ALL.iter().position(|&x| x == a).expect("axis listed")];
-    let accel_kind = find(&AccelKind::ALL, AccelKind::name, name_of(get(Axis::Accel)));
+    let accel_name = name_of(get(Axis::Accel));
+    let peer = PeerKind::ALL.into_iter().find(|p| p.name() == accel_name).map(|kind| PeerSettings {
+        kind,
+        obvhs: find(&ObvhsQuality::ALL, ObvhsQuality::name, name_of(get(Axis::ObvhsBuild))),
+        embree: find(&EmbreeQuality::ALL, EmbreeQuality::name, name_of(get(Axis::EmbreeBuild))),
+        isa: Some(name_of(get(Axis::EmbreeIsa))).filter(|&i| i != EMBREE_ISAS[0]),
+    });
+    let accel_kind = if peer.is_some() { AccelKind::List } else { find(&AccelKind::ALL, AccelKind::name, accel_name) };
     let split = find(&Split::ALL, Split::name, name_of(get(Axis::Split)));
-    let tree = accel_kind != AccelKind::List;
+    let tree = peer.is_none() && accel_kind != AccelKind::List;
     let bvh = if tree {
         BvhParams {
             max_leaf_size: int_of(get(Axis::LeafSize)) as u32,
@@ -160,6 +189,7 @@ fn settings(values: &[Value], cores: usize, file_scene: &Option<Arc<Scene>>) -> 
         objects,
         seed,
         accel: AccelParams { kind: accel_kind, bvh },
+        peer,
         strategy: Strategy::new(kind, threads),
         width: int_of(get(Axis::Width)) as u32,
         height: int_of(get(Axis::Height)) as u32,

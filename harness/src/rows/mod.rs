@@ -11,11 +11,12 @@ use std::path::Path;
 /// Column names, in order (see `report/ROWS.md`).
 pub const COLUMNS: &[&str] = &[
     "experiment", "config_id", "series", "repetition", "scene", "objects", "seed", "accel", "split", "leaf_size",
-    "sah_bins", "traversal", "strategy", "threads", "width", "height", "max_depth", "workload", "scene_s", "build_s",
+    "sah_bins", "traversal", "strategy", "threads", "width", "height", "max_depth", "workload", "obvhs_build",
+    "embree_build", "embree_isa", "scene_s", "build_s",
     "trace_s", "encode_s", "total_s", "rays", "mrays_per_s", "nodes_per_ray", "box_tests_per_ray",
     "prim_tests_per_ray", "tree_nodes", "tree_leaves", "tree_depth", "tree_bytes", "sah_cost", "image_hash",
     "scene_fingerprint", "git_commit", "git_dirty", "rustc", "cpu_model", "logical_cores", "load_avg_1m", "timestamp",
-    "harness_version",
+    "harness_version", "validation", "validated_against", "mismatches", "peer_info",
 ];
 
 /// Quotes a CSV field when it needs it (RFC 4180).

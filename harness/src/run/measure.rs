@@ -1,27 +1,32 @@
-//! One run: generate the scene, build the accelerator, trace (and encode), each phase timed; and the
-//! separate counted pass that gives the deterministic work counters.
+//! One run: generate the scene, build the backend, trace (and encode), each phase timed; the counted pass
+//! that gives the deterministic work counters; and the answers used to validate a backend.
 
 use std::time::Instant;
 
-use tracer::accel::{AccelVisitor, Accelerator, BuiltAccel, TreeStats};
+use tracer::accel::{AccelVisitor, Accelerator, TreeStats};
 use tracer::counters::{Counters, NoCounters, WorkCounters};
-use tracer::render::{RenderSettings, render, trace_primary};
+use tracer::rays::{RayAnswers, RaySet, trace};
+use tracer::render::{RenderSettings, render};
 use tracer::scene::Scene;
 
+use super::backend::Backend;
 use crate::config::axes::Workload;
+use crate::error::Error;
 use crate::plan::{SceneSource, Settings};
 
 /// Wall times of one run, and what it produced.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Timing {
     pub scene_s: f64,
     pub build_s: f64,
     pub trace_s: f64,
     pub encode_s: f64,
-    /// Image hash (render) or primary-hit hash (primary).
+    /// Image hash (render) or ray-set answer hash.
     pub output_hash: u64,
     pub scene_fingerprint: u64,
     pub stats: TreeStats,
+    /// Peer library facts (`-` for the tracer's structures).
+    pub peer_info: String,
 }
 
 impl Timing {
@@ -29,9 +34,37 @@ impl Timing {
     pub fn total_s(&self) -> f64 {
         self.scene_s + self.build_s + self.trace_s + self.encode_s
     }
+
+    /// One line for a worker process to hand its result to the sweep (tab-separated).
+    pub fn to_line(&self) -> String {
+        let s = &self.stats;
+        format!(
+            "{}\t{}\t{}\t{}\t{:016x}\t{:016x}\t{}\t{}\t{}\t{}\t{}\t{}",
+            self.scene_s, self.build_s, self.trace_s, self.encode_s, self.output_hash, self.scene_fingerprint,
+            s.nodes, s.leaves, s.depth, s.bytes, s.sah_cost, self.peer_info
+        )
+    }
+
+    /// Parses [`Timing::to_line`].
+    pub fn from_line(line: &str) -> Option<Timing> {
+        let f: Vec<&str> = line.trim_end_matches('\n').split('\t').collect();
+        let hex = |s: &str| u64::from_str_radix(s, 16).ok();
+        (f.len() == 12).then_some(())?;
+        Some(Timing {
+            scene_s: f[0].parse().ok()?,
+            build_s: f[1].parse().ok()?,
+            trace_s: f[2].parse().ok()?,
+            encode_s: f[3].parse().ok()?,
+            output_hash: hex(f[4])?,
+            scene_fingerprint: hex(f[5])?,
+            stats: TreeStats { nodes: f[6].parse().ok()?, leaves: f[7].parse().ok()?, depth: f[8].parse().ok()?, bytes: f[9].parse().ok()?, sah_cost: f[10].parse().ok()? },
+            peer_info: f[11].to_string(),
+        })
+    }
 }
 
-fn make_scene(s: &Settings) -> Scene {
+/// The scene of `s` at its image size.
+pub fn make_scene(s: &Settings) -> Scene {
     let scene = match &s.scene {
         SceneSource::Generated(kind) => kind.generate(s.objects, s.seed),
         SceneSource::File(scene) => Scene::clone(scene),
@@ -39,57 +72,104 @@ fn make_scene(s: &Settings) -> Scene {
     Scene { camera: scene.camera.with_resolution(s.width, s.height), ..scene }
 }
 
-/// Traces the workload with counters `C`; returns the output hash, the encoded PNG size and the counters.
-struct Trace<'a, C> {
+/// Runs the workload with counters `C`: the output hash, the counters and (for ray sets) the answers.
+struct Work<'a, C> {
     scene: &'a Scene,
     settings: &'a Settings,
-    encode: Option<&'a mut f64>,
+    rays: Option<&'a RaySet>,
+    encode_s: Option<&'a mut f64>,
     _c: std::marker::PhantomData<C>,
 }
 
-impl<C: Counters> AccelVisitor for Trace<'_, C> {
-    type Output = (u64, C);
-    fn visit<A: Accelerator>(self, accel: &A) -> (u64, C) {
+impl<C: Counters> AccelVisitor for Work<'_, C> {
+    type Output = (u64, C, Option<RayAnswers>);
+    fn visit<A: Accelerator>(self, accel: &A) -> Self::Output {
         let s = self.settings;
         match s.workload {
             Workload::Render => {
                 let (image, c) = render::<_, C>(self.scene, accel, &RenderSettings { max_depth: s.max_depth }, &s.strategy);
-                if let Some(encode_s) = self.encode {
+                if let Some(encode_s) = self.encode_s {
                     let t = Instant::now();
                     let mut png = Vec::new();
                     image.write_png(&mut png).expect("encoding into memory cannot fail");
                     std::hint::black_box(&png);
                     *encode_s = t.elapsed().as_secs_f64();
                 }
-                (image.hash(), c)
+                (image.hash(), c, None)
             }
-            Workload::Primary => {
-                let (hits, c) = trace_primary::<_, C>(&self.scene.camera, accel, &s.strategy);
-                (hits.hash(), c)
+            Workload::Rays(_) => {
+                let set = self.rays.expect("ray-set workloads come with their rays");
+                let (answers, c) = trace::<_, C>(accel, set, &s.strategy);
+                (answers.hash(), c, Some(answers))
             }
         }
     }
 }
 
-/// Runs `settings` once with every phase timed (no counters).
-pub fn timed(settings: &Settings) -> Timing {
+/// Runs `settings` once with every phase timed (no counters). `rays` is the workload's ray set.
+pub fn timed(settings: &Settings, rays: Option<&RaySet>) -> Result<Timing, Error> {
     let t = Instant::now();
     let scene = make_scene(settings);
     let scene_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let accel = BuiltAccel::build(&scene.spheres, &settings.accel);
+    let backend = Backend::build(settings, &scene.spheres)?;
     let build_s = t.elapsed().as_secs_f64();
     let mut encode_s = 0.0;
     let t = Instant::now();
-    let (output_hash, _) = accel.visit(Trace::<NoCounters> { scene: &scene, settings, encode: Some(&mut encode_s), _c: Default::default() });
+    let (output_hash, _, _) =
+        backend.visit(Work::<NoCounters> { scene: &scene, settings, rays, encode_s: Some(&mut encode_s), _c: Default::default() });
     let trace_s = t.elapsed().as_secs_f64() - encode_s;
-    Timing { scene_s, build_s, trace_s, encode_s, output_hash, scene_fingerprint: scene.fingerprint(), stats: accel.stats() }
+    Ok(Timing {
+        scene_s,
+        build_s,
+        trace_s,
+        encode_s,
+        output_hash,
+        scene_fingerprint: scene.fingerprint(),
+        stats: backend.stats(),
+        peer_info: backend.peer_info(),
+    })
 }
 
-/// Runs `settings` once with work counters (untimed); returns the counters and the output hash.
-pub fn counted(settings: &Settings) -> (WorkCounters, u64) {
+/// Runs `settings` once with work counters (untimed): counters, output hash, and the ray-set answers of
+/// `answer_rays` (the workload's own set, or the primary set for the render workload) for validation.
+pub fn counted(settings: &Settings, rays: Option<&RaySet>, answer_rays: &RaySet) -> Result<(WorkCounters, u64, RayAnswers), Error> {
     let scene = make_scene(settings);
-    let accel = BuiltAccel::build(&scene.spheres, &settings.accel);
-    let (hash, c) = accel.visit(Trace::<WorkCounters> { scene: &scene, settings, encode: None, _c: Default::default() });
-    (c, hash)
+    let backend = Backend::build(settings, &scene.spheres)?;
+    let (hash, c, answers) = backend.visit(Work::<WorkCounters> { scene: &scene, settings, rays, encode_s: None, _c: Default::default() });
+    let answers = match (answers, rays) {
+        (Some(a), Some(r)) if std::ptr::eq(r, answer_rays) => a,
+        _ => {
+            struct Answers<'a>(&'a RaySet, &'a Settings);
+            impl AccelVisitor for Answers<'_> {
+                type Output = RayAnswers;
+                fn visit<A: Accelerator>(self, a: &A) -> RayAnswers {
+                    trace::<_, NoCounters>(a, self.0, &self.1.strategy).0
+                }
+            }
+            backend.visit(Answers(answer_rays, settings))
+        }
+    };
+    Ok((c, hash, answers))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn timing_lines_round_trip() {
+        let t = Timing {
+            scene_s: 0.125,
+            build_s: 1e-5,
+            trace_s: 3.25,
+            encode_s: 0.0,
+            output_hash: 0xdead_beef_0123_4567,
+            scene_fingerprint: 42,
+            stats: TreeStats { nodes: 7, leaves: 4, depth: 2, bytes: 1024, sah_cost: 3.5 },
+            peer_info: "embree 4.4.0 native width 8 (avx/avx2), threads=1".into(),
+        };
+        assert_eq!(Timing::from_line(&t.to_line()), Some(t));
+        assert_eq!(Timing::from_line("1\t2"), None);
+    }
 }

@@ -1,20 +1,26 @@
 //! Runs a plan: every planned run timed, its counters from a separate counted pass (once per
 //! configuration), one row appended and flushed per timed repetition, then the report rebuilt.
 
-mod measure;
+mod backend;
+pub mod measure;
 pub mod provenance;
+pub mod validate;
 
 use std::collections::{HashMap, HashSet};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::process::Command;
 
 use tracer::counters::WorkCounters;
+use tracer::rays::RaySet;
 
 use crate::config::Experiment;
 use crate::error::Error;
 use crate::output::Progress;
-use crate::plan::{Configuration, Plan};
+use crate::plan::{Configuration, Plan, Settings};
 use crate::rows::RowLog;
+use measure::Timing;
 use provenance::{Provenance, load_average_1m, timestamp_now};
+use validate::RayBank;
 
 /// File names inside a run folder.
 pub const RUNS_CSV: &str = "runs.csv";
@@ -47,12 +53,78 @@ fn describe(c: &Configuration) -> String {
     format!("{} {} objects={} seed={} {}", c.series, s.workload.name(), s.objects, s.seed, s.strategy)
 }
 
-fn row(exp: &Experiment, c: &Configuration, rep: u32, t: &measure::Timing, w: &WorkCounters, p: &Provenance, load: f64, ts: String) -> Vec<String> {
+/// What validation found for one configuration.
+#[derive(Clone, Debug)]
+struct Checked {
+    counters: WorkCounters,
+    output_hash: u64,
+    reference: &'static str,
+    mismatches: usize,
+    rays: usize,
+}
+
+/// How to start a worker process for runs that must not share this process (Embree: TBB's thread limit
+/// is process-wide).
+#[derive(Clone, Debug)]
+pub struct WorkerCall {
+    pub config: PathBuf,
+    pub quick: bool,
+}
+
+impl WorkerCall {
+    fn time(&self, c: &Configuration) -> Result<Timing, Error> {
+        let exe = std::env::current_exe().map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
+        let mut cmd = Command::new(exe);
+        cmd.arg("worker").arg(&self.config).args(["--config-id", &c.id]);
+        if self.quick {
+            cmd.arg("--quick");
+        }
+        let out = cmd.output().map_err(|e| Error::Run(format!("cannot start a worker process: {e}")))?;
+        let text = String::from_utf8_lossy(&out.stdout);
+        match (out.status.success(), text.lines().last().and_then(Timing::from_line)) {
+            (true, Some(t)) => Ok(t),
+            _ => Err(Error::Run(format!(
+                "worker for {} failed: {}",
+                describe(c),
+                String::from_utf8_lossy(&out.stderr).trim().lines().last().unwrap_or("no output")
+            ))),
+        }
+    }
+}
+
+/// The ray set a settings' workload traces (`None` for the render workload).
+fn workload_rays(s: &Settings, bank: &mut RayBank) -> Option<std::sync::Arc<RaySet>> {
+    match s.workload {
+        crate::config::axes::Workload::Rays(k) => Some(bank.get(s, k).0),
+        crate::config::axes::Workload::Render => None,
+    }
+}
+
+/// Runs one configuration of the plan in this process and returns its timing: the worker side of
+/// [`WorkerCall`].
+pub fn work(plan: &Plan, config_id: &str) -> Result<Timing, Error> {
+    let c = plan.configurations.iter().find(|c| c.id == config_id).ok_or_else(|| Error::Input(format!("no configuration {config_id} in this plan")))?;
+    let rays = match c.settings.workload {
+        crate::config::axes::Workload::Rays(k) => Some(validate::generate(k, &measure::make_scene(&c.settings), c.settings.seed)),
+        crate::config::axes::Workload::Render => None,
+    };
+    measure::timed(&c.settings, rays.as_ref())
+}
+
+fn check(c: &Configuration, bank: &mut RayBank) -> Result<Checked, Error> {
+    let rays = workload_rays(&c.settings, bank);
+    let (set, reference, name) = bank.get(&c.settings, RayBank::validation_kind(c.settings.workload));
+    let (counters, output_hash, answers) = measure::counted(&c.settings, rays.as_deref(), &set)?;
+    Ok(Checked { counters, output_hash, reference: name, mismatches: validate::mismatches(&set, &reference, &answers), rays: set.rays.len() })
+}
+
+fn row(exp: &Experiment, c: &Configuration, rep: u32, t: &Timing, v: &Checked, p: &Provenance, load: f64, ts: String) -> Vec<String> {
+    let w = &v.counters;
     let (nodes, boxes, prims) = w.per_ray();
     let trace_s = t.trace_s.max(1e-12);
-    let mut v = vec![exp.name.clone(), c.id.clone(), c.series.clone(), rep.to_string()];
-    v.extend(c.settings.columns());
-    v.extend([
+    let mut row = vec![exp.name.clone(), c.id.clone(), c.series.clone(), rep.to_string()];
+    row.extend(c.settings.columns());
+    row.extend([
         format!("{:.9}", t.scene_s),
         format!("{:.9}", t.build_s),
         format!("{:.9}", t.trace_s),
@@ -78,12 +150,18 @@ fn row(exp: &Experiment, c: &Configuration, rep: u32, t: &measure::Timing, w: &W
         format!("{load:.2}"),
         ts,
         p.harness_version.clone(),
+        if v.mismatches == 0 { "exact".into() } else { "FAILED".into() },
+        v.reference.to_string(),
+        v.mismatches.to_string(),
+        t.peer_info.clone(),
     ]);
-    v
+    row
 }
 
-/// Runs every planned run not yet recorded in `dir`, appending rows as they finish.
-pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<(), Error> {
+/// Runs every planned run not yet recorded in `dir`, appending rows as they finish. Each configuration is
+/// validated (and counted) once before its first timed run; one that disagrees with the reference is
+/// recorded once with `validation = FAILED` and no timings, and never timed.
+pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool, worker: &WorkerCall) -> Result<(), Error> {
     let (mut log, done) = open_log(exp, dir, resume)?;
     let provenance = Provenance::collect();
     let is_done = |config: usize, rep: u32| done.contains(&(plan.configurations[config].id.clone(), rep));
@@ -100,17 +178,45 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<
         eprintln!("resuming {}: {} rows already recorded, {} runs to go", dir.display(), done.len(), todo.len());
     }
     let mut progress = Progress::new(todo.len());
-    let mut counted: HashMap<usize, (WorkCounters, u64)> = HashMap::new();
+    let mut bank = RayBank::default();
+    let mut checked: HashMap<usize, Checked> = HashMap::new();
+    let mut failed: HashSet<usize> = HashSet::new();
     for run in todo {
         let c = &plan.configurations[run.config];
+        if failed.contains(&run.config) {
+            progress.finished(&format!("{} skipped: failed validation", describe(c)));
+            continue;
+        }
+        if !checked.contains_key(&run.config) {
+            let v = check(c, &mut bank)?;
+            if v.mismatches > 0 {
+                eprintln!(
+                    "VALIDATION FAILED: {}: {} of {} rays disagree with {}; this configuration is not timed",
+                    describe(c), v.mismatches, v.rays, v.reference
+                );
+                let nan = Timing { scene_s: f64::NAN, build_s: f64::NAN, trace_s: f64::NAN, encode_s: f64::NAN, output_hash: v.output_hash, scene_fingerprint: 0, stats: Default::default(), peer_info: "-".into() };
+                let values = row(exp, c, 0, &nan, &v, &provenance, load_average_1m(), timestamp_now());
+                log.append(&values).map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))?;
+                failed.insert(run.config);
+                progress.finished(&format!("{} FAILED validation", describe(c)));
+                continue;
+            }
+            checked.insert(run.config, v);
+        }
         let load = load_average_1m();
         let ts = timestamp_now();
-        let timing = measure::timed(&c.settings);
+        let timing = if c.settings.peer.is_some_and(|p| p.kind.needs_embree()) {
+            worker.time(c)?
+        } else {
+            let rays = workload_rays(&c.settings, &mut bank);
+            measure::timed(&c.settings, rays.as_deref())?
+        };
         let Some(rep) = run.repetition else {
             progress.finished(&format!("{} warm-up", describe(c)));
             continue;
         };
-        let (counters, hash) = *counted.entry(run.config).or_insert_with(|| measure::counted(&c.settings));
+        let v = &checked[&run.config];
+        let hash = v.output_hash;
         if hash != timing.output_hash {
             return Err(Error::Run(format!(
                 "{}: the counted pass produced output {hash:016x} but the timed pass {:016x}: the tracer is not deterministic",
@@ -118,7 +224,7 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<
                 timing.output_hash
             )));
         }
-        let values = row(exp, c, rep, &timing, &counters, &provenance, load, ts);
+        let values = row(exp, c, rep, &timing, v, &provenance, load, ts);
         log.append(&values).map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))?;
         progress.finished(&format!("{} rep {rep}: {:.3} s", describe(c), timing.total_s()));
     }

@@ -245,11 +245,13 @@ where
         let stroke = colour.stroke_width(2);
         let shape = marker(line.style);
         // 95% intervals: a vertical bar with caps at both ends.
-        cc.draw_series(line.points.iter().map(|p| PathElement::new([(p.x, p.lo), (p.x, p.hi)], stroke)))
-            .map_err(e)?;
-        cc.draw_series(line.points.iter().flat_map(|p| [(p.x, p.lo), (p.x, p.hi)]).map(|at| {
-            EmptyElement::at(at) + PathElement::new([(-6, 0), (6, 0)], stroke)
-        }))
+        cc.draw_series(line.points.iter().map(|p| PathElement::new([(p.x, p.lo), (p.x, p.hi)], stroke))).map_err(e)?;
+        cc.draw_series(
+            line.points
+                .iter()
+                .flat_map(|p| [(p.x, p.lo), (p.x, p.hi)])
+                .map(|at| EmptyElement::at(at) + PathElement::new([(-6, 0), (6, 0)], stroke)),
+        )
         .map_err(e)?;
         cc.draw_series(LineSeries::new(line.points.iter().map(|p| (p.x, p.y)), stroke)).map_err(e)?;
         let legend_shape = shape.clone();

@@ -5,7 +5,7 @@ mod chart;
 use std::path::{Path, PathBuf};
 
 use crate::error::Error;
-use crate::pool::{self, Point};
+use crate::pool::{self, Curve, Point};
 use crate::rows::Rows;
 use crate::spec::{PlotKind, PlotSpec, ReportSpec};
 
@@ -38,31 +38,36 @@ fn plotted_series<'a>(spec: &'a ReportSpec, plot: &'a PlotSpec) -> Vec<&'a str> 
 fn chart_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Chart {
     let reference = spec.reference.as_deref();
     let metric_ok = rows.is_numeric(&plot.y);
+    let runs: Vec<crate::rows::Run> = rows.runs.iter().filter(|r| r.passes(&plot.filter)).cloned().collect();
     let mut lines = Vec::new();
     for series in plotted_series(spec, plot) {
-        let points: Vec<Point> = match (plot.kind, reference) {
+        let curves: Vec<Curve> = match (plot.kind, reference) {
             _ if !metric_ok => Vec::new(),
-            (PlotKind::Metric, _) => pool::metric_points(&rows.runs, series, &plot.x, &plot.y),
+            (PlotKind::Metric, _) => pool::metric_curves(&runs, series, &plot.x, &plot.y),
             (_, Some(reference)) if reference == series => Vec::new(),
             (PlotKind::Speedup | PlotKind::Efficiency, Some(reference)) => {
-                pool::ratio_points(spec, &rows.runs, reference, series, &plot.x, &plot.y)
+                pool::ratio_curves(spec, &runs, reference, series, &plot.x, &plot.y)
             }
             (_, None) => Vec::new(),
         };
         let per = |p: &Point| if plot.kind == PlotKind::Efficiency { p.threads } else { 1.0 };
-        let points: Vec<ChartPoint> = points
-            .iter()
-            .map(|p| ChartPoint {
-                x: p.x,
-                y: p.estimate.value / per(p),
-                lo: p.estimate.lo / per(p),
-                hi: p.estimate.hi / per(p),
-            })
-            .collect();
-        // Position in the config's series order: the same colour and marker in every figure.
-        let style = spec.series.iter().position(|s| s == series).unwrap_or(spec.series.len() + lines.len());
-        if !points.is_empty() {
-            lines.push(Line { label: series.to_string(), style, points });
+        let single = curves.len() == 1;
+        for curve in curves.into_iter().filter(|c| !c.points.is_empty()) {
+            let points: Vec<ChartPoint> = curve
+                .points
+                .iter()
+                .map(|p| ChartPoint {
+                    x: p.x,
+                    y: p.estimate.value / per(p),
+                    lo: p.estimate.lo / per(p),
+                    hi: p.estimate.hi / per(p),
+                })
+                .collect();
+            // A series drawn as one line keeps its config position: the same look in every figure.
+            let position = spec.series.iter().position(|s| s == series).filter(|_| single);
+            let style = position.unwrap_or(spec.series.len() + lines.len());
+            let label = if curve.fixed.is_empty() { series.to_string() } else { format!("{series} ({})", curve.fixed) };
+            lines.push(Line { label, style, points });
         }
     }
     let reference = reference.unwrap_or("reference");

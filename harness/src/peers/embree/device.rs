@@ -118,7 +118,6 @@ pub(super) struct DeviceInner {
     pub(super) raw: RTCDevice,
     /// The last error the callback reported; boxed so its address (the callback's user pointer) is stable.
     errors: Box<Mutex<Option<String>>>,
-    pub(super) config: EmbreeConfig,
     pub(super) info: DeviceInfo,
 }
 
@@ -214,7 +213,7 @@ impl EmbreeDevice {
             native_packet,
             tasking,
         };
-        let inner = DeviceInner { lib, raw, errors: Box::new(Mutex::new(None)), config: config.clone(), info };
+        let inner = DeviceInner { lib, raw, errors: Box::new(Mutex::new(None)), info };
         if !(40000..50000).contains(&v) {
             return Err(EmbreeError::Api(format!("{} is Embree {}, not Embree 4", inner.info.path, inner.info.version)));
         }
@@ -227,10 +226,5 @@ impl EmbreeDevice {
     /// What the device reports about itself.
     pub fn info(&self) -> &DeviceInfo {
         &self.inner.info
-    }
-
-    /// The configuration it was created with.
-    pub fn config(&self) -> &EmbreeConfig {
-        &self.inner.config
     }
 }

@@ -13,6 +13,6 @@ pub mod scene;
 #[cfg(test)]
 mod tests;
 
-pub use device::{DeviceInfo, EmbreeConfig, EmbreeDevice, EmbreeError, EmbreeQuality};
-pub use library::{EmbreeLibrary, EmbreeUnavailable, INSTALL_HINT, SearchInputs};
+pub use device::{EmbreeConfig, EmbreeDevice, EmbreeQuality};
+pub use library::{EmbreeLibrary, EmbreeUnavailable};
 pub use scene::EmbreeSpheres;

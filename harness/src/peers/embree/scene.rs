@@ -7,7 +7,7 @@ use tracer::counters::Counters;
 use tracer::geometry::{Ray, Sphere};
 
 use super::abi::*;
-use super::device::{DeviceInner, EmbreeDevice, EmbreeError, EmbreeQuality};
+use super::device::{DeviceInfo, DeviceInner, EmbreeDevice, EmbreeError, EmbreeQuality};
 
 /// Our spheres as one Embree `RTC_GEOMETRY_TYPE_SPHERE_POINT` geometry (geomID 0) in a committed scene.
 pub struct EmbreeSpheres {
@@ -64,6 +64,8 @@ fn rtc_ray(ray: &Ray) -> RTCRay {
 
 impl EmbreeSpheres {
     /// Builds (commits) the scene; Embree errors reported during the build become `Err`.
+    ///
+    /// The commit runs on TBB's pool, not rayon's: do not build while rayon traces, or the pools oversubscribe.
     pub fn build(device: &EmbreeDevice, spheres: &[Sphere], quality: EmbreeQuality) -> Result<Self, EmbreeError> {
         let inner = device.inner.clone();
         let api = inner.lib.api;
@@ -124,14 +126,9 @@ impl EmbreeSpheres {
         result
     }
 
-    /// Number of spheres in the scene.
-    pub fn len(&self) -> usize {
-        self.count
-    }
-
-    /// True for a scene without spheres.
-    pub fn is_empty(&self) -> bool {
-        self.count == 0
+    /// What the device that built this scene reports (version, configuration, native packet width).
+    pub fn device_info(&self) -> &DeviceInfo {
+        &self.device.info
     }
 
     /// Closest hits of up to 16 rays with one `rtcIntersect16` call; lanes past `rays.len()` are `None`.

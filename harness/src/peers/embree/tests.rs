@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use tracer::accel::{Accelerator, List};
 use tracer::counters::NoCounters;
 
+use super::library::SearchInputs;
 use super::*;
 use crate::peers::testing::{Tolerance, assert_agrees, embree_device, hit_grazes, same_hit, scenes};
 
@@ -13,7 +14,7 @@ fn single_rays_agree_with_brute_force() {
     let Some(device) = embree_device("single_rays_agree_with_brute_force") else { return };
     for (label, spheres, rays) in scenes() {
         let scene = EmbreeSpheres::build(&device, &spheres, EmbreeQuality::Medium).expect("build");
-        assert_eq!(scene.len(), spheres.len());
+        assert_eq!(scene.stats().bytes, spheres.len() * 16);
         assert_agrees(&format!("embree {label}"), &scene, &spheres, &rays, Tolerance::Relative);
     }
 }
@@ -141,5 +142,21 @@ fn camera_hits_match_exactly_without_excuses() {
             let differ = want.hits.iter().zip(&got.hits).filter(|(w, g)| (w.prim == u32::MAX) != (g.prim == u32::MAX)).count();
             assert_eq!(differ, 0, "{} n={n}: pixels whose hit/miss differ", kind.name());
         }
+    }
+}
+
+#[test]
+fn pinned_isa_sets_the_native_packet_width() {
+    let Some(_) = embree_device("pinned_isa_sets_the_native_packet_width") else { return };
+    let (_, spheres, rays) = scenes().into_iter().rfind(|(_, s, _)| s.len() == 50).unwrap();
+    let on_cpu = [true, true, is_x86_feature_detected!("avx"), is_x86_feature_detected!("avx2"), is_x86_feature_detected!("avx512f")];
+    for ((isa, width), on_cpu) in [("sse2", 4), ("sse4.2", 4), ("avx", 8), ("avx2", 8), ("avx512", 16)].into_iter().zip(on_cpu) {
+        if !on_cpu {
+            continue;
+        }
+        let device = EmbreeDevice::new(&EmbreeConfig { threads: Some(1), isa: Some(isa.into()), ..EmbreeConfig::default() }).expect(isa);
+        assert_eq!(device.info().native_packet, width, "isa={isa}: {:?}", device.info());
+        let scene = EmbreeSpheres::build(&device, &spheres, EmbreeQuality::Medium).expect(isa);
+        assert_agrees(&format!("embree isa={isa}"), &scene, &spheres, &rays, Tolerance::Relative);
     }
 }

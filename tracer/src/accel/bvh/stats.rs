@@ -6,7 +6,7 @@ use super::sah;
 use super::traverse::TreeView;
 
 /// Statistics of a built accelerator, recorded with every run.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct TreeStats {
     /// Tree nodes (0 for a list).
     pub nodes: usize,
