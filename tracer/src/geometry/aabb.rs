@@ -83,19 +83,35 @@ impl RayBoxTester {
     /// Error bound on the far slab distance (pbrt's `1 + 2 * gamma(3)`): keeps grazing hits inside their box.
     const FAR_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
-    /// Prepares `ray` for box tests.
+    /// Prepares `ray` for box tests. Zero direction components become ±1e-30, so reciprocals stay finite
+    /// and no slab distance is ever NaN (a ray that parallel crosses no slab plane within any float range).
     #[inline(always)]
     pub fn new(ray: &Ray) -> Self {
-        Self { origin: ray.origin, inv_dir: ray.dir.recip(), t_min: ray.t_min }
+        let nonzero = |d: f32| if d.abs() < 1e-30 { 1e-30f32.copysign(d) } else { d };
+        let d = ray.dir;
+        Self { origin: ray.origin, inv_dir: Vec3::new(nonzero(d.x), nonzero(d.y), nonzero(d.z)).recip(), t_min: ray.t_min }
     }
 
     /// Entry distance into `b` when the ray meets it before `t_max`, else `f32::INFINITY`.
+    ///
+    /// Plain compares instead of IEEE `min`/`max` (one instruction each): exact here because no slab
+    /// distance is NaN (see [`RayBoxTester::new`]).
     #[inline(always)]
     pub fn entry(&self, b: &Aabb, t_max: f32) -> f32 {
-        let t0 = (b.min - self.origin) * self.inv_dir;
-        let t1 = (b.max - self.origin) * self.inv_dir;
-        let near = t0.min(t1).max_element().max(self.t_min);
-        let far = t0.max(t1).min_element() * Self::FAR_SCALE;
+        #[inline(always)]
+        fn lo(a: f32, b: f32) -> f32 {
+            if a < b { a } else { b }
+        }
+        #[inline(always)]
+        fn hi(a: f32, b: f32) -> f32 {
+            if a > b { a } else { b }
+        }
+        let (o, inv) = (self.origin, self.inv_dir);
+        let (x0, x1) = ((b.min.x - o.x) * inv.x, (b.max.x - o.x) * inv.x);
+        let (y0, y1) = ((b.min.y - o.y) * inv.y, (b.max.y - o.y) * inv.y);
+        let (z0, z1) = ((b.min.z - o.z) * inv.z, (b.max.z - o.z) * inv.z);
+        let near = hi(hi(lo(x0, x1), lo(y0, y1)), hi(lo(z0, z1), self.t_min));
+        let far = lo(lo(hi(x0, x1), hi(y0, y1)), hi(z0, z1)) * Self::FAR_SCALE;
         if near <= far && near <= t_max { near } else { f32::INFINITY }
     }
 }

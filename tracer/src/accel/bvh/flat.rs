@@ -35,15 +35,26 @@ impl FlatBvh {
         &self.nodes
     }
 
+    /// The node at `index`, which came from the root or a parent's `first` (always in range).
+    #[inline(always)]
+    fn node(&self, index: u32) -> &FlatNode {
+        debug_assert!((index as usize) < self.nodes.len());
+        // SAFETY: indices come from the root (0; the builder always emits a root) or from an interior
+        // node's `first`/`first + 1`, which the builder allocates before recording them.
+        unsafe { self.nodes.get_unchecked(index as usize) }
+    }
+
     #[inline(always)]
     fn closest<O: ChildOrder, C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
         let mut best = u32::MAX;
         let mut best_t = ray.t_max;
         traverse::<_, O, C, _>(self, ray, counters, |node, t_max, counters| {
-            let n = &self.nodes[node as usize];
-            for i in n.first..n.first + n.prim_count {
+            let n = self.node(node);
+            // SAFETY: the builder makes every leaf's run lie inside `spheres` (one sphere per prim id).
+            let leaf = unsafe { self.spheres.get_unchecked(n.first as usize..(n.first + n.prim_count) as usize) };
+            for (i, s) in (n.first..).zip(leaf) {
                 counters.prim_test();
-                if let Some(t) = self.spheres[i as usize].intersect(ray, *t_max) {
+                if let Some(t) = s.intersect(ray, *t_max) {
                     *t_max = t;
                     best_t = t;
                     best = i;
@@ -58,8 +69,10 @@ impl FlatBvh {
     fn any<O: ChildOrder, C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
         let mut found = false;
         traverse::<_, O, C, _>(self, ray, counters, |node, t_max, counters| {
-            let n = &self.nodes[node as usize];
-            found = self.spheres[n.first as usize..(n.first + n.prim_count) as usize].iter().any(|s| {
+            let n = self.node(node);
+            // SAFETY: as in `closest`.
+            let leaf = unsafe { self.spheres.get_unchecked(n.first as usize..(n.first + n.prim_count) as usize) };
+            found = leaf.iter().any(|s| {
                 counters.prim_test();
                 s.intersect(ray, *t_max).is_some()
             });
@@ -79,12 +92,12 @@ impl TreeView for FlatBvh {
 
     #[inline(always)]
     fn bounds(&self, node: u32) -> &Aabb {
-        &self.nodes[node as usize].bounds
+        &self.node(node).bounds
     }
 
     #[inline(always)]
     fn children(&self, node: u32) -> Option<[u32; 2]> {
-        let n = &self.nodes[node as usize];
+        let n = self.node(node);
         (!n.is_leaf()).then(|| [n.first, n.first + 1])
     }
 

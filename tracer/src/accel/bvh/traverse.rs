@@ -77,7 +77,10 @@ where
                 };
                 if t_near != f32::INFINITY {
                     if t_far != f32::INFINITY {
-                        stack[len].write((far, t_far));
+                        debug_assert!(len < MAX_DEPTH);
+                        // SAFETY: at most one entry is pushed per level descended, and builders keep every
+                        // tree under MAX_DEPTH levels (tested), so `len < MAX_DEPTH` here.
+                        unsafe { stack.get_unchecked_mut(len) }.write((far, t_far));
                         len += 1;
                     }
                     node = near;
@@ -99,7 +102,7 @@ where
         while len > 0 {
             len -= 1;
             // SAFETY: entries below `len` were written above and each is read once.
-            let (next, t_entry) = unsafe { stack[len].assume_init_read() };
+            let (next, t_entry) = unsafe { stack.get_unchecked(len).assume_init_read() };
             if t_entry < t_max {
                 node = next;
                 counters.node_visit();
