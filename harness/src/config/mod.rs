@@ -293,15 +293,31 @@ impl Experiment {
     }
 
     /// Columns a series fixes, counting those its fixed values make irrelevant (serial fixes threads at 1;
-    /// a list has no split, leaf size, bins or traversal), so that speedup matching ignores them.
+    /// each kind of accelerator leaves the other kinds' settings at `-`), so that speedup matching
+    /// ignores them.
     fn fixed_columns(s: &Series) -> Vec<String> {
-        let only = |a: Axis, name: &str| s.fixed.get(&a).is_some_and(|v| v.iter().all(|x| matches!(x, Value::Name(n) if *n == name)));
+        let all_in = |a: Axis, names: &[&str]| {
+            s.fixed.get(&a).is_some_and(|v| v.iter().all(|x| matches!(x, Value::Name(n) if names.contains(n))))
+        };
+        let tree = [Axis::Split, Axis::LeafSize, Axis::SahBins, Axis::Traversal];
         let mut axes: Vec<Axis> = s.fixed.keys().copied().collect();
-        if only(Axis::Strategy, "serial") {
+        if all_in(Axis::Strategy, &["serial"]) {
             axes.push(Axis::Threads);
         }
-        if only(Axis::Accel, "list") {
-            axes.extend([Axis::Split, Axis::LeafSize, Axis::SahBins, Axis::Traversal]);
+        if all_in(Axis::Split, &["centroid-midpoint", "object-median", "sweep-sah"]) {
+            axes.push(Axis::SahBins);
+        }
+        if all_in(Axis::Accel, &["list"]) {
+            axes.extend(tree);
+        }
+        if all_in(Axis::Accel, &["list", "bvh", "flat-bvh", "embree", "embree-packets"]) {
+            axes.push(Axis::ObvhsBuild);
+        }
+        if all_in(Axis::Accel, &["list", "bvh", "flat-bvh", "obvhs-bvh2", "obvhs-cwbvh"]) {
+            axes.extend([Axis::EmbreeBuild, Axis::EmbreeIsa]);
+        }
+        if all_in(Axis::Accel, &["obvhs-bvh2", "obvhs-cwbvh", "embree", "embree-packets"]) {
+            axes.extend(tree);
         }
         axes.sort();
         axes.dedup();
@@ -321,5 +337,21 @@ impl Experiment {
             config_text: self.text.clone(),
             notes,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn series_fix_the_columns_their_accelerator_makes_irrelevant() {
+        let text = "name = \"t\"\n[sweep]\n[[series]]\nlabel = \"ours\"\naccel = \"flat-bvh\"\ntraversal = \"front-to-back\"\n\
+                    [[series]]\nlabel = \"o\"\naccel = \"obvhs-bvh2\"\n[[series]]\nlabel = \"s\"\nstrategy = \"serial\"\naccel = \"list\"\n";
+        let spec = Experiment::parse(Path::new("t.toml"), text).unwrap().report_spec(vec![]);
+        let fixed = |l: &str| spec.series_fixed[l].join(",");
+        assert_eq!(fixed("ours"), "accel,traversal,obvhs_build,embree_build,embree_isa");
+        assert_eq!(fixed("o"), "accel,split,leaf_size,sah_bins,traversal,embree_build,embree_isa");
+        assert_eq!(fixed("s"), "accel,split,leaf_size,sah_bins,traversal,strategy,threads,obvhs_build,embree_build,embree_isa");
     }
 }
