@@ -162,8 +162,8 @@ fn row(exp: &Experiment, c: &Configuration, rep: u32, t: &Timing, v: &Checked, p
 /// validated (and counted) once before its first timed run; one that disagrees with the reference is
 /// recorded once with `validation = FAILED` and no timings, and never timed.
 pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool, worker: &WorkerCall) -> Result<(), Error> {
-    let (mut log, done) = open_log(exp, dir, resume)?;
     let provenance = Provenance::collect();
+    let (mut log, done) = open_log(exp, dir, resume)?;
     let is_done = |config: usize, rep: u32| done.contains(&(plan.configurations[config].id.clone(), rep));
     let reps = exp.repetitions;
     let todo: Vec<_> = plan

@@ -27,7 +27,9 @@ impl Provenance {
             .and_then(|s| s.lines().find(|l| l.starts_with("model name")).and_then(|l| l.split(':').nth(1)).map(|m| m.trim().to_string()))
             .unwrap_or_else(|| std::env::consts::ARCH.to_string());
         let git_commit = git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into());
-        let git_dirty = git(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
+        // Dirty means the code differs from the commit: recorded results (rewritten by every run) do not count.
+        let git_dirty = git(&["status", "--porcelain", "--untracked-files=no", "--", ".", ":(exclude)results"])
+            .is_some_and(|s| !s.is_empty());
         Provenance {
             git_commit,
             git_dirty,
