@@ -158,3 +158,51 @@ fn quick_paper_experiment_end_to_end() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.join("REPORT.md").exists());
 }
+
+#[test]
+fn check_claims_exits_1_when_a_claim_fails() {
+    let dir = temp("claims");
+    let cfg = dir.join("claims.toml");
+    std::fs::write(
+        &cfg,
+        "name = \"claims\"\nrepetitions = 2\n[sweep]\nobjects = 300\nwidth = 48\nheight = 32\nworkload = \"primary\"\n\
+         [[series]]\nlabel = \"list\"\naccel = \"list\"\n[[series]]\nlabel = \"bvh\"\naccel = \"flat-bvh\"\n\
+         [[claim]]\ntext = \"the list is 1000x faster than the BVH\"\nkind = \"faster\"\nseries = \"list\"\nthan = \"bvh\"\nfactor = 1000\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let run = |extra: &[&str]| harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]).args(extra).output().unwrap();
+    let o = run(&[]);
+    assert!(o.status.success(), "without --check-claims a failed claim is reported, not fatal: {}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("claim FAILS"));
+    let o = run(&["--check-claims"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+}
+
+#[test]
+fn a_missing_embree_is_reported_skipped_or_refused() {
+    let dir = temp("noembree");
+    let cfg = dir.join("peers.toml");
+    std::fs::write(
+        &cfg,
+        "name = \"noembree\"\n[sweep]\nobjects = 100\nwidth = 32\nheight = 24\nworkload = \"primary\"\n\
+         [[series]]\nlabel = \"ours\"\naccel = \"flat-bvh\"\n[[series]]\nlabel = \"embree\"\naccel = \"embree\"\n",
+    )
+    .unwrap();
+    let without = |args: &[&str]| harness().env("EMBREE_LIB", dir.join("no-such-libembree4.so")).args(args).output().unwrap();
+    let o = without(&["list"]);
+    let listed = String::from_utf8_lossy(&o.stdout);
+    assert!(listed.contains("embree, embree-packets: unavailable") && listed.contains("pip install embreex==4.4.0.post1"), "{listed}");
+    let out = dir.join("out");
+    let o = without(&["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows = recorded(&out.join("runs.csv"));
+    assert_eq!(rows.len(), 1, "only the flat BVH ran");
+    let report = std::fs::read_to_string(out.join("REPORT.md")).unwrap();
+    assert!(report.contains("Embree 4 is unavailable, so these series were skipped: embree"), "{report}");
+    let refused = dir.join("refused");
+    let o = without(&["run", cfg.to_str().unwrap(), "--out", refused.to_str().unwrap(), "--require-all"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert_eq!(stderr(&o).trim_end().lines().count(), 1);
+    assert!(stderr(&o).contains("Embree 4 is unavailable") && !refused.exists());
+}

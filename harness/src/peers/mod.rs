@@ -10,8 +10,6 @@ pub mod embree;
 pub mod obvhs;
 
 #[cfg(test)]
-mod perf;
-#[cfg(test)]
 mod testing;
 
 use std::fmt;
