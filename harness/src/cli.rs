@@ -28,6 +28,13 @@ pub enum Command {
     Render(RenderArgs),
     /// List scenes, accelerators and peer backends (with availability), splits, traversal orders and strategies.
     List,
+    /// Compare a run with a stored baseline: exact work counters, and single-thread speedups with intervals.
+    Check(CheckArgs),
+    /// Build another git revision and time both builds on a config, interleaved; report new/old ratios.
+    Ab(AbArgs),
+    /// Manage stored baselines.
+    #[command(subcommand)]
+    Baseline(BaselineCommand),
     /// Internal: time one configuration in a fresh process and print its timing line (used for Embree).
     #[command(hide = true)]
     Worker(WorkerArgs),
@@ -55,6 +62,56 @@ pub struct RunArgs {
     /// Exit with code 2 when a backend the config names is unavailable (default: skip it and say so).
     #[arg(long)]
     pub require_all: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct CheckArgs {
+    /// The run folder to check.
+    pub run_dir: PathBuf,
+    /// The baseline folder (e.g. results/baselines/ci).
+    #[arg(long)]
+    pub baseline: PathBuf,
+    /// Smallest speedup change that counts as a regression or improvement (0.10 = 10%).
+    #[arg(long, default_value_t = 0.10)]
+    pub min_effect: f64,
+    /// Metric the speedups are computed from.
+    #[arg(long, default_value = "trace_s")]
+    pub metric: String,
+    /// List changed work counters without failing on them.
+    #[arg(long)]
+    pub accept_counter_changes: bool,
+    /// Where to write the JSON of every measure (default: RUN_DIR/check.json).
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+pub struct AbArgs {
+    /// The revision to compare against (anything `git rev-parse` takes; it needs `harness worker`).
+    #[arg(long)]
+    pub base: String,
+    /// Experiment config (TOML).
+    pub config: PathBuf,
+    /// Use the config's [quick] overrides.
+    #[arg(long)]
+    pub quick: bool,
+    /// Smallest slowdown that counts as a regression (0.10 = 10%).
+    #[arg(long, default_value_t = 0.10)]
+    pub min_effect: f64,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum BaselineCommand {
+    /// Store a run folder as results/baselines/NAME/ (refuses to replace one without --force).
+    Save {
+        /// The run folder.
+        run_dir: PathBuf,
+        /// The baseline's name.
+        name: String,
+        /// Replace an existing baseline.
+        #[arg(long)]
+        force: bool,
+    },
 }
 
 #[derive(Args, Debug)]

@@ -1,5 +1,8 @@
 //! `harness`: the bvhlab command line. The data's trip: config → plan → run → rows → report.
 
+mod ab;
+mod baseline;
+mod check;
 mod cli;
 mod config;
 mod error;
@@ -17,7 +20,7 @@ use std::process::ExitCode;
 use clap::Parser;
 use report::spec::Verdict;
 
-use cli::{Command, ReportArgs, RunArgs, ValidateArgs, WorkerArgs};
+use cli::{BaselineCommand, CheckArgs, Command, ReportArgs, RunArgs, ValidateArgs, WorkerArgs};
 use config::Experiment;
 use error::Error;
 use plan::Plan;
@@ -30,6 +33,11 @@ fn main() -> ExitCode {
         Command::Validate(args) => validate_command(&args),
         Command::Render(args) => render::run(&args),
         Command::Worker(args) => worker_command(&args),
+        Command::Check(args) => check_command(&args),
+        Command::Ab(args) => ab::run(&ab::AbRequest { base: &args.base, config: &args.config, quick: args.quick, min_effect: args.min_effect }),
+        Command::Baseline(BaselineCommand::Save { run_dir, name, force }) => baseline::save(&run_dir, &name, force).map(|dest| {
+            println!("baseline saved: {}", dest.display());
+        }),
         Command::List => {
             list::run();
             Ok(())
@@ -104,6 +112,19 @@ fn skip_unavailable(exp: &Experiment, plan: &mut Plan, require_all: bool) -> Res
     eprintln!("note: {note}");
     plan.notes.push(note);
     Ok(())
+}
+
+fn check_command(args: &CheckArgs) -> Result<(), Error> {
+    if !(0.0..1.0).contains(&args.min_effect) {
+        return Err(Error::Input(format!("--min-effect {}: out of range (allowed: 0 <= x < 1)", args.min_effect)));
+    }
+    let options = report::check::CheckOptions {
+        metric: args.metric.clone(),
+        min_effect: args.min_effect,
+        accept_counter_changes: args.accept_counter_changes,
+        ..Default::default()
+    };
+    check::run(&check::CheckRequest { run_dir: &args.run_dir, baseline: &args.baseline, options, json: args.json.clone() })
 }
 
 fn worker_command(args: &WorkerArgs) -> Result<(), Error> {

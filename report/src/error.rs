@@ -14,6 +14,8 @@ pub enum Error {
     NoRows { path: PathBuf },
     /// A file could not be written.
     Write { path: PathBuf, message: String },
+    /// Two files that should describe the same experiment do not (`report::check`).
+    Mismatch { path: PathBuf, message: String },
 }
 
 impl Error {
@@ -40,6 +42,7 @@ impl fmt::Display for Error {
             }
             Error::NoRows { path } => write!(f, "{} has no rows", path.display()),
             Error::Write { path, message } => write!(f, "cannot write {}: {message}", path.display()),
+            Error::Mismatch { path, message } => write!(f, "{}: {message}", path.display()),
         }
     }
 }

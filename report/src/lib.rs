@@ -6,6 +6,7 @@
 //! the figures work on those points; [`markdown`] writes REPORT.md. All intervals are 95%
 //! percentile-bootstrap intervals from [`stats`], seeded from fixed keys so reports are reproducible.
 
+pub mod check;
 pub mod spec;
 
 mod claims;
@@ -14,7 +15,7 @@ mod figures;
 mod markdown;
 mod pool;
 mod rows;
-mod stats;
+pub mod stats;
 mod summary;
 
 use std::fs::File;

@@ -79,7 +79,7 @@ pub struct Curve {
 
 /// The runs of `series` split into curves (see [`Curve`]), each grouped by x value (ascending).
 /// Runs without a numeric x are left out.
-fn curves_of<'a>(runs: &'a [Run], series: &str, x: &str) -> Vec<(String, Vec<(f64, Vec<&'a Run>)>)> {
+pub(crate) fn curves_of<'a>(runs: &'a [Run], series: &str, x: &str) -> Vec<(String, Vec<(f64, Vec<&'a Run>)>)> {
     let own: Vec<&Run> = runs.iter().filter(|r| r.series() == series && r.num(x).is_finite()).collect();
     let varying: Vec<&str> = SETTINGS
         .iter()

@@ -76,7 +76,7 @@ pub fn seed_for(key: &str) -> u64 {
 }
 
 /// Median of one resample (with replacement) of `samples`, using `scratch` as buffer.
-fn resampled_median(samples: &[f64], rng: &mut SplitMix64, scratch: &mut Vec<f64>) -> f64 {
+pub(crate) fn resampled_median(samples: &[f64], rng: &mut SplitMix64, scratch: &mut Vec<f64>) -> f64 {
     scratch.clear();
     scratch.extend((0..samples.len()).map(|_| samples[rng.below(samples.len() as u64) as usize]));
     scratch.sort_by(f64::total_cmp);
@@ -84,7 +84,7 @@ fn resampled_median(samples: &[f64], rng: &mut SplitMix64, scratch: &mut Vec<f64
 }
 
 /// The percentile interval of bootstrap replicates.
-fn percentile_interval(mut replicates: Vec<f64>) -> (f64, f64) {
+pub(crate) fn percentile_interval(mut replicates: Vec<f64>) -> (f64, f64) {
     replicates.sort_by(f64::total_cmp);
     let tail = (1.0 - LEVEL) / 2.0;
     (quantile_of_sorted(&replicates, tail), quantile_of_sorted(&replicates, 1.0 - tail))
@@ -92,7 +92,7 @@ fn percentile_interval(mut replicates: Vec<f64>) -> (f64, f64) {
 
 /// The samples in ascending order: resampling sorted samples makes an interval depend on the
 /// multiset of samples only, not on the order the rows came in.
-fn sorted(samples: &[f64]) -> Vec<f64> {
+pub(crate) fn sorted(samples: &[f64]) -> Vec<f64> {
     let mut sorted = samples.to_vec();
     sorted.sort_by(f64::total_cmp);
     sorted
