@@ -130,7 +130,12 @@ pub struct CheckOutcome {
 }
 
 /// Compares `run_dir/runs.csv` with `baseline_dir/runs.csv`.
-pub fn compare(run_dir: &Path, baseline_dir: &Path, spec: &ReportSpec, options: &CheckOptions) -> Result<CheckOutcome, Error> {
+pub fn compare(
+    run_dir: &Path,
+    baseline_dir: &Path,
+    spec: &ReportSpec,
+    options: &CheckOptions,
+) -> Result<CheckOutcome, Error> {
     let (new_path, old_path) = (run_dir.join("runs.csv"), baseline_dir.join("runs.csv"));
     let new = rows::read(&new_path)?;
     let old = rows::read(&old_path)?;
@@ -252,7 +257,13 @@ fn pool_key(run: &Run) -> Vec<String> {
 }
 
 /// Speedup comparisons of every non-reference series at every point present in both runs.
-fn speedups(spec: &ReportSpec, reference: &str, new: &[Run], old: &[Run], options: &CheckOptions) -> Vec<SpeedupComparison> {
+fn speedups(
+    spec: &ReportSpec,
+    reference: &str,
+    new: &[Run],
+    old: &[Run],
+    options: &CheckOptions,
+) -> Vec<SpeedupComparison> {
     let metric = options.metric.as_str();
     let old_pools: BTreeMap<Vec<String>, Vec<&Run>> =
         pool::seed_pools(old).into_iter().map(|group| (pool_key(group[0]), group)).collect();
@@ -321,8 +332,7 @@ fn ratio_of_ratios_ci(sets: [&[f64]; 4], seed: u64) -> (f64, f64) {
     let mut scratch = Vec::new();
     let replicates = (0..stats::RESAMPLES)
         .map(|_| {
-            let [a, b, c, d] =
-                [0, 1, 2, 3].map(|i| stats::resampled_median(&sorted[i], &mut rng, &mut scratch));
+            let [a, b, c, d] = [0, 1, 2, 3].map(|i| stats::resampled_median(&sorted[i], &mut rng, &mut scratch));
             (a / b) / (c / d)
         })
         .collect();
@@ -409,7 +419,13 @@ impl CheckOutcome {
             reasons.push(format!("{} gating regression(s): {}", regressions.len(), regressions.join("; ")));
         }
         // Without a gating regression, the check fails exactly when these were not accepted.
-        let accepted = if !self.failed { " (accepted)" } else if regressions.is_empty() { " (not accepted)" } else { "" };
+        let accepted = if !self.failed {
+            " (accepted)"
+        } else if regressions.is_empty() {
+            " (not accepted)"
+        } else {
+            ""
+        };
         if !self.counter_changes.is_empty() {
             reasons.push(format!("{} counter change(s){accepted}", self.counter_changes.len()));
         }
@@ -426,7 +442,12 @@ impl CheckOutcome {
     /// Every measure as a JSON document: speedups (value, lower, upper of old, new, ratio), counter changes, missing, failed.
     pub fn to_json(&self) -> String {
         let estimate = |e: &Estimate| {
-            format!("{{\"value\": {}, \"lower\": {}, \"upper\": {}}}", json_num(e.value), json_num(e.lo), json_num(e.hi))
+            format!(
+                "{{\"value\": {}, \"lower\": {}, \"upper\": {}}}",
+                json_num(e.value),
+                json_num(e.lo),
+                json_num(e.hi)
+            )
         };
         let speedups: Vec<String> = self
             .speedups
