@@ -35,6 +35,9 @@ pub enum Command {
     /// Manage stored baselines.
     #[command(subcommand)]
     Baseline(BaselineCommand),
+    /// Track speedups over commits.
+    #[command(subcommand)]
+    History(HistoryCommand),
     /// Internal: time one configuration in a fresh process and print its timing line (used for Embree).
     #[command(hide = true)]
     Worker(WorkerArgs),
@@ -98,6 +101,24 @@ pub struct AbArgs {
     /// Smallest slowdown that counts as a regression (0.10 = 10%).
     #[arg(long, default_value_t = 0.10)]
     pub min_effect: f64,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum HistoryCommand {
+    /// Append a run's speedups (with intervals), commit, time and counter fingerprint to the history.
+    Append {
+        /// The run folder.
+        run_dir: PathBuf,
+        /// The history folder.
+        #[arg(long, default_value = "results/history")]
+        dir: PathBuf,
+    },
+    /// Plot every tracked speedup over the appended runs (SVG + PNG per experiment, regressions marked).
+    Plot {
+        /// The history folder.
+        #[arg(long, default_value = "results/history")]
+        dir: PathBuf,
+    },
 }
 
 #[derive(Subcommand, Debug)]

@@ -20,7 +20,7 @@ use std::process::ExitCode;
 use clap::Parser;
 use report::spec::Verdict;
 
-use cli::{BaselineCommand, CheckArgs, Command, ReportArgs, RunArgs, ValidateArgs, WorkerArgs};
+use cli::{BaselineCommand, CheckArgs, Command, HistoryCommand, ReportArgs, RunArgs, ValidateArgs, WorkerArgs};
 use config::Experiment;
 use error::Error;
 use plan::Plan;
@@ -34,6 +34,10 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(&args),
         Command::Worker(args) => worker_command(&args),
         Command::Check(args) => check_command(&args),
+        Command::History(HistoryCommand::Append { run_dir, dir }) => history_append(&run_dir, &dir),
+        Command::History(HistoryCommand::Plot { dir }) => report::history::plot(&dir)
+            .map(|files| files.iter().for_each(|f| println!("{}", f.display())))
+            .map_err(|e| Error::Input(e.to_string())),
         Command::Ab(args) => ab::run(&ab::AbRequest { base: &args.base, config: &args.config, quick: args.quick, min_effect: args.min_effect }),
         Command::Baseline(BaselineCommand::Save { run_dir, name, force }) => baseline::save(&run_dir, &name, force).map(|dest| {
             println!("baseline saved: {}", dest.display());
@@ -111,6 +115,17 @@ fn skip_unavailable(exp: &Experiment, plan: &mut Plan, require_all: bool) -> Res
     let note = format!("Embree 4 is unavailable, so these series were skipped: {}. {e}", skipped.join(", "));
     eprintln!("note: {note}");
     plan.notes.push(note);
+    Ok(())
+}
+
+fn history_append(run_dir: &Path, dir: &Path) -> Result<(), Error> {
+    let path = run_dir.join(run::CONFIG_COPY);
+    if !run_dir.join(run::RUNS_CSV).is_file() {
+        return Err(Error::Input(format!("{}: no {} here (not a run folder)", run_dir.display(), run::RUNS_CSV)));
+    }
+    let exp = Experiment::load(&path)?;
+    let n = report::history::append(run_dir, &exp.report_spec(vec![]), dir, &Default::default()).map_err(|e| Error::Input(e.to_string()))?;
+    println!("history: {n} speedups of {} appended to {}", run_dir.display(), dir.join("history.csv").display());
     Ok(())
 }
 

@@ -247,3 +247,21 @@ fn baseline_save_and_check_bad_input() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("does not match the baseline"), "{}", stderr(&o));
 }
+
+#[test]
+fn ab_against_head_reports_ratios_near_one() {
+    // Builds HEAD in a worktree under target/ab/ (a few minutes on a clean machine), then times a tiny config
+    // with both builds, interleaved. The working tree's code is HEAD's or a small change of it: no regression.
+    let dir = temp("ab");
+    let cfg = dir.join("ab.toml");
+    std::fs::write(&cfg, "name = \"ab\"\nrepetitions = 6\nwarmups = 1\n[sweep]\naccel = \"flat-bvh\"\ntraversal = \"front-to-back\"\nobjects = 3000\nwidth = 96\nheight = 64\nworkload = \"primary\"\n").unwrap();
+    let o = harness().args(["ab", "--base", "HEAD", cfg.to_str().unwrap()]).output().unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{out}\n{}", stderr(&o));
+    assert!(out.contains("| default | random-spheres objects 3000 serial |"), "{out}");
+    assert!(out.contains("| same |"), "both builds answer alike: {out}");
+    let ratio: f64 = out.lines().find(|l| l.starts_with("| default")).unwrap().split('|').nth(5).unwrap().split_whitespace().next().unwrap().parse().unwrap();
+    assert!((0.7..1.4).contains(&ratio), "new/old near 1, got {ratio}: {out}");
+    let o = harness().args(["ab", "--base", "no-such-revision", cfg.to_str().unwrap()]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}

@@ -257,7 +257,7 @@ fn pool_key(run: &Run) -> Vec<String> {
 }
 
 /// Speedup comparisons of every non-reference series at every point present in both runs.
-fn speedups(
+pub(crate) fn speedups(
     spec: &ReportSpec,
     reference: &str,
     new: &[Run],

@@ -7,11 +7,12 @@
 //! percentile-bootstrap intervals from [`stats`], seeded from fixed keys so reports are reproducible.
 
 pub mod check;
+pub mod history;
 pub mod spec;
 
 mod claims;
 mod error;
-mod figures;
+pub(crate) mod figures;
 mod markdown;
 mod pool;
 mod rows;

@@ -1,6 +1,6 @@
 //! The figures of a report: one chart per `[[plot]]`, written as `figures/<file>.svg` and `.png`.
 
-mod chart;
+pub(crate) mod chart;
 
 use std::path::{Path, PathBuf};
 

@@ -1,0 +1,210 @@
+//! A speedup history: one line per tracked speedup of each appended run (`history.csv`), and a figure per
+//! experiment of every speedup over the appended commits, regressions marked.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use tracer::fingerprint::Fnv64;
+
+use crate::check::{COUNTERS, CheckOptions, speedups};
+use crate::error::Error;
+use crate::figures::chart::{self, Chart, ChartPoint, Line};
+use crate::rows;
+use crate::spec::ReportSpec;
+
+/// The history file's columns.
+const HEADER: &str = "experiment,commit,dirty,timestamp,series,point,speedup,lower,upper,counters";
+
+/// A drop of the speedup by more than this fraction from the previous entry is marked as a regression.
+pub const REGRESSION: f64 = 0.10;
+
+/// One line of `history.csv`.
+#[derive(Clone, Debug, PartialEq)]
+struct Entry {
+    experiment: String,
+    commit: String,
+    dirty: String,
+    timestamp: String,
+    series: String,
+    point: String,
+    speedup: f64,
+    lower: f64,
+    upper: f64,
+    counters: String,
+}
+
+fn quote(s: &str) -> String {
+    if s.contains([',', '"']) { format!("\"{}\"", s.replace('"', "\"\"")) } else { s.to_string() }
+}
+
+fn split(line: &str) -> Vec<String> {
+    let (mut fields, mut cur, mut quoted) = (Vec::new(), String::new(), false);
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '"' if quoted && chars.peek() == Some(&'"') => {
+                chars.next();
+                cur.push('"');
+            }
+            '"' => quoted = !quoted,
+            ',' if !quoted => fields.push(std::mem::take(&mut cur)),
+            c => cur.push(c),
+        }
+    }
+    fields.push(cur);
+    fields
+}
+
+fn read(path: &Path) -> Result<Vec<Entry>, Error> {
+    let Ok(text) = std::fs::read_to_string(path) else { return Ok(vec![]) };
+    text.lines()
+        .skip(1)
+        .map(|l| {
+            let f = split(l);
+            let num = |i: usize| f.get(i).and_then(|v| v.parse().ok()).unwrap_or(f64::NAN);
+            if f.len() != 10 {
+                return Err(Error::Mismatch { path: path.into(), message: format!("malformed line {l:?}") });
+            }
+            Ok(Entry {
+                experiment: f[0].clone(),
+                commit: f[1].clone(),
+                dirty: f[2].clone(),
+                timestamp: f[3].clone(),
+                series: f[4].clone(),
+                point: f[5].clone(),
+                speedup: num(6),
+                lower: num(7),
+                upper: num(8),
+                counters: f[9].clone(),
+            })
+        })
+        .collect()
+}
+
+/// Appends every speedup of `run_dir` (against `spec.reference`, same run) to `history_dir/history.csv`;
+/// returns how many lines were added. The same run (experiment, commit, time) is never appended twice.
+pub fn append(run_dir: &Path, spec: &ReportSpec, history_dir: &Path, options: &CheckOptions) -> Result<usize, Error> {
+    let runs_csv = run_dir.join("runs.csv");
+    let rows = rows::read(&runs_csv)?;
+    let Some(reference) = spec.reference.as_deref() else {
+        return Err(Error::Mismatch { path: runs_csv, message: "the experiment names no reference series, so it has no speedups to track".into() });
+    };
+    let first = &rows.runs[0];
+    let timestamp = rows.runs.iter().map(|r| r.text("timestamp")).max().unwrap_or_default().to_string();
+    let mut by_config: BTreeMap<&str, &rows::Run> = BTreeMap::new();
+    for r in &rows.runs {
+        by_config.entry(r.config_id()).or_insert(r);
+    }
+    let mut h = Fnv64::default();
+    for (id, r) in &by_config {
+        h.bytes(id.as_bytes());
+        for c in COUNTERS {
+            h.bytes(r.text(c).as_bytes()).bytes(b"|");
+        }
+    }
+    let counters = format!("{:016x}", h.finish());
+    let path = history_dir.join("history.csv");
+    let existing = read(&path)?;
+    let experiment = first.text("experiment").to_string();
+    let commit = first.text("git_commit").chars().take(12).collect::<String>();
+    if existing.iter().any(|e| e.experiment == experiment && e.commit == commit && e.timestamp == timestamp) {
+        return Err(Error::Mismatch { path, message: format!("{} is already in the history", run_dir.display()) });
+    }
+    let mut text = if existing.is_empty() { format!("{HEADER}\n") } else { String::new() };
+    let points = speedups(spec, reference, &rows.runs, &rows.runs, options);
+    for p in &points {
+        text.push_str(&format!(
+            "{},{},{},{},{},{},{},{},{},{}\n",
+            quote(&experiment),
+            commit,
+            first.text("git_dirty"),
+            timestamp,
+            quote(&p.series),
+            quote(&p.point),
+            p.new.value,
+            p.new.lo,
+            p.new.hi,
+            counters
+        ));
+    }
+    std::fs::create_dir_all(history_dir).map_err(|e| Error::write(history_dir, e))?;
+    use std::io::Write as _;
+    let mut file = std::fs::OpenOptions::new().create(true).append(true).open(&path).map_err(|e| Error::write(&path, e))?;
+    file.write_all(text.as_bytes()).map_err(|e| Error::write(&path, e))?;
+    Ok(points.len())
+}
+
+/// Draws `history_dir/<experiment>.svg|png` for every experiment in the history (x: appended runs in
+/// order; a drop of more than [`REGRESSION`] from the previous entry, beyond both intervals, is marked),
+/// and `HISTORY.md` listing each entry's commit and time. Returns the files written.
+pub fn plot(history_dir: &Path) -> Result<Vec<PathBuf>, Error> {
+    let path = history_dir.join("history.csv");
+    let entries = read(&path)?;
+    if entries.is_empty() {
+        return Err(Error::NoRows { path });
+    }
+    let mut files = Vec::new();
+    let mut md = String::from("# Speedup history\n\nEach figure plots every tracked speedup (95% interval) against the appended runs, in order; ");
+    md.push_str("red crosses mark drops of more than 10% beyond both intervals.\n\n");
+    let experiments: Vec<String> = entries.iter().fold(Vec::new(), |mut v, e| {
+        if !v.contains(&e.experiment) {
+            v.push(e.experiment.clone());
+        }
+        v
+    });
+    for experiment in experiments {
+        let own: Vec<&Entry> = entries.iter().filter(|e| e.experiment == experiment).collect();
+        let mut runs: Vec<(String, String, String, String)> = Vec::new();
+        for e in &own {
+            let key = (e.commit.clone(), e.timestamp.clone(), e.dirty.clone(), e.counters.clone());
+            if !runs.contains(&key) {
+                runs.push(key);
+            }
+        }
+        let index = |e: &Entry| runs.iter().position(|r| r.0 == e.commit && r.1 == e.timestamp).unwrap() as f64 + 1.0;
+        let mut lines: Vec<Line> = Vec::new();
+        let mut regressions: Vec<ChartPoint> = Vec::new();
+        let mut tracks: Vec<(String, String)> = Vec::new();
+        for e in &own {
+            let t = (e.series.clone(), e.point.clone());
+            if !tracks.contains(&t) {
+                tracks.push(t);
+            }
+        }
+        for (i, (series, point)) in tracks.iter().enumerate() {
+            let track: Vec<&&Entry> = own.iter().filter(|e| &e.series == series && &e.point == point).collect();
+            let points: Vec<ChartPoint> = track.iter().map(|e| ChartPoint { x: index(e), y: e.speedup, lo: e.lower, hi: e.upper }).collect();
+            for pair in track.windows(2) {
+                let (before, after) = (pair[0], pair[1]);
+                if after.speedup < before.speedup * (1.0 - REGRESSION) && after.upper < before.lower {
+                    regressions.push(ChartPoint { x: index(after), y: after.speedup, lo: after.speedup, hi: after.speedup });
+                }
+            }
+            lines.push(Line { label: format!("{series} {point}"), style: i, points });
+        }
+        if !regressions.is_empty() {
+            lines.push(Line { label: "regression".into(), style: tracks.len(), points: regressions });
+        }
+        let chart = Chart {
+            title: format!("{experiment}: speedups over the appended runs"),
+            x_label: "appended run (see HISTORY.md)".into(),
+            y_label: "speedup vs reference (×)".into(),
+            log_x: false,
+            log_y: true,
+            lines,
+            guide: None,
+        };
+        let (svg, png) = (history_dir.join(format!("{experiment}.svg")), history_dir.join(format!("{experiment}.png")));
+        chart::render(&chart, &svg, &png).map_err(|(p, e)| Error::write(&p, e))?;
+        md.push_str(&format!("## {experiment}\n\n![{experiment}]({experiment}.svg)\n\n| run | commit | dirty | time | counters |\n|---|---|---|---|---|\n"));
+        for (i, r) in runs.iter().enumerate() {
+            md.push_str(&format!("| {} | {} | {} | {} | {} |\n", i + 1, r.0, r.2, r.1, r.3));
+        }
+        md.push('\n');
+        files.extend([svg, png]);
+    }
+    let md_path = history_dir.join("HISTORY.md");
+    std::fs::write(&md_path, md).map_err(|e| Error::write(&md_path, e))?;
+    files.push(md_path);
+    Ok(files)
+}
