@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use tracer::fingerprint::Fnv64;
 
 use crate::check::{COUNTERS, CheckOptions, speedups};
+use crate::csv::{field as quote, split_line as split};
 use crate::error::Error;
 use crate::figures::chart::{self, Chart, ChartPoint, Line};
 use crate::rows;
@@ -31,28 +32,6 @@ struct Entry {
     lower: f64,
     upper: f64,
     counters: String,
-}
-
-fn quote(s: &str) -> String {
-    if s.contains([',', '"']) { format!("\"{}\"", s.replace('"', "\"\"")) } else { s.to_string() }
-}
-
-fn split(line: &str) -> Vec<String> {
-    let (mut fields, mut cur, mut quoted) = (Vec::new(), String::new(), false);
-    let mut chars = line.chars().peekable();
-    while let Some(c) = chars.next() {
-        match c {
-            '"' if quoted && chars.peek() == Some(&'"') => {
-                chars.next();
-                cur.push('"');
-            }
-            '"' => quoted = !quoted,
-            ',' if !quoted => fields.push(std::mem::take(&mut cur)),
-            c => cur.push(c),
-        }
-    }
-    fields.push(cur);
-    fields
 }
 
 fn read(path: &Path) -> Result<Vec<Entry>, Error> {

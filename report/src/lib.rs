@@ -7,6 +7,7 @@
 //! percentile-bootstrap intervals from [`stats`], seeded from fixed keys so reports are reproducible.
 
 pub mod check;
+pub mod csv;
 pub mod history;
 pub mod spec;
 

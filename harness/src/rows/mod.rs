@@ -8,6 +8,8 @@ use std::fs::{File, OpenOptions};
 use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::Path;
 
+pub use report::csv::{field as csv_field, split_line as split_csv_line};
+
 /// Column names, in order (see `report/ROWS.md`).
 pub const COLUMNS: &[&str] = &[
     "experiment", "config_id", "series", "repetition", "scene", "objects", "seed", "accel", "split", "leaf_size",
@@ -18,30 +20,6 @@ pub const COLUMNS: &[&str] = &[
     "scene_fingerprint", "git_commit", "git_dirty", "rustc", "cpu_model", "logical_cores", "load_avg_1m", "timestamp",
     "harness_version", "validation", "validated_against", "mismatches", "peer_info",
 ];
-
-/// Quotes a CSV field when it needs it (RFC 4180).
-pub fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) { format!("\"{}\"", s.replace('"', "\"\"")) } else { s.to_string() }
-}
-
-/// Splits one CSV line into fields (RFC 4180 quoting).
-pub fn split_csv_line(line: &str) -> Vec<String> {
-    let mut fields = vec![String::new()];
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(c) = chars.next() {
-        match (c, quoted) {
-            ('"', true) if chars.peek() == Some(&'"') => {
-                chars.next();
-                fields.last_mut().unwrap().push('"');
-            }
-            ('"', _) => quoted = !quoted,
-            (',', false) => fields.push(String::new()),
-            (c, _) => fields.last_mut().unwrap().push(c),
-        }
-    }
-    fields
-}
 
 /// The append-only row log of one run folder.
 pub struct RowLog {
