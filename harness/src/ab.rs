@@ -11,7 +11,7 @@ use report::stats::{Estimate, ratio_ci, seed_for};
 use crate::config::Experiment;
 use crate::error::Error;
 use crate::plan::Plan;
-use crate::run::measure::Timing;
+use crate::run::{self, worker};
 
 /// What `harness ab` was asked.
 pub struct AbRequest<'a> {
@@ -52,24 +52,6 @@ fn build_base(root: &Path, rev: &str) -> Result<PathBuf, Error> {
     Ok(ab.join("target").join("release").join("harness"))
 }
 
-fn time_once(binary: &Path, root: &Path, config: &Path, quick: bool, id: &str) -> Result<Timing, Error> {
-    let mut cmd = Command::new(binary);
-    cmd.current_dir(root).arg("worker").arg(config).args(["--config-id", id]);
-    if quick {
-        cmd.arg("--quick");
-    }
-    let out = cmd.output().map_err(|e| Error::Run(format!("{}: {e}", binary.display())))?;
-    let text = String::from_utf8_lossy(&out.stdout);
-    match (out.status.success(), text.lines().last().and_then(Timing::from_line)) {
-        (true, Some(t)) => Ok(t),
-        _ => Err(Error::Run(format!(
-            "{} worker for configuration {id} failed (the base revision needs `harness worker`): {}",
-            binary.display(),
-            String::from_utf8_lossy(&out.stderr).trim().lines().last().unwrap_or("no output")
-        ))),
-    }
-}
-
 /// A configuration's samples from both builds.
 struct Pair {
     old: Vec<f64>,
@@ -84,7 +66,6 @@ pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
     let plan = Plan::new(&exp, crate::render::available_threads())?;
     let root = PathBuf::from(git(Path::new("."), &["rev-parse", "--show-toplevel"])?);
     let rev = git(&root, &["rev-parse", "--verify", &format!("{}^{{commit}}", request.base)])?;
-    let config = std::fs::canonicalize(request.config).map_err(|e| Error::Input(format!("{}: {e}", request.config.display())))?;
     let old_bin = build_base(&root, &rev)?;
     let new_bin = std::env::current_exe().map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
     let mut pairs: Vec<Pair> = plan.configurations.iter().map(|_| Pair { old: vec![], new: vec![], same_output: true }).collect();
@@ -93,8 +74,9 @@ pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
         for (c, pair) in plan.configurations.iter().zip(&mut pairs) {
             let old_first = round % 2 == 0;
             let (first, second) = if old_first { (&old_bin, &new_bin) } else { (&new_bin, &old_bin) };
-            let a = time_once(first, &root, &config, request.quick, &c.id)?;
-            let b = time_once(second, &root, &config, request.quick, &c.id)?;
+            let job = run::worker_request(&plan, c);
+            let a = worker::time(first, Some(&root), &job)?;
+            let b = worker::time(second, Some(&root), &job)?;
             let (old, new) = if old_first { (a, b) } else { (b, a) };
             pair.same_output &= old.output_hash == new.output_hash;
             if round >= exp.warmups {
@@ -112,7 +94,7 @@ pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
     for (c, pair) in plan.configurations.iter().zip(&pairs) {
         let e: Estimate = ratio_ci(&pair.new, &pair.old, seed_for(&c.id));
         let (slower, faster) = (e.lo > 1.0 && e.value > 1.0 + request.min_effect, e.hi < 1.0 && e.value < 1.0 - request.min_effect);
-        let gating = c.settings.strategy.threads == 1;
+        let gating = c.settings.strategy().threads == 1;
         let verdict = match (slower, faster) {
             (true, _) if gating => "**regressed**",
             (true, _) => "slower (not gating: threads > 1)",
@@ -124,9 +106,9 @@ pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
         println!(
             "| {} | {} objects {} {} | {:.6} | {:.6} | {:.3} [{:.3}, {:.3}] | {verdict} | {} |",
             c.series,
-            s.scene_name(),
+            schema::Named::name(s.scene),
             s.objects,
-            s.strategy,
+            s.strategy(),
             report::stats::median(&pair.old),
             report::stats::median(&pair.new),
             e.value,

@@ -36,15 +36,14 @@ pub fn save(run_dir: &Path, name: &str, force: bool) -> Result<PathBuf, Error> {
     for f in KEPT.iter().filter(|f| run_dir.join(f).is_file()) {
         std::fs::copy(run_dir.join(f), dest.join(f)).map_err(|e| io(&dest.join(f), e))?;
     }
-    let rows = std::fs::read_to_string(run_dir.join(RUNS_CSV)).map_err(|e| io(&run_dir.join(RUNS_CSV), e))?;
-    let header: Vec<String> = rows.lines().next().map(crate::rows::split_csv_line).unwrap_or_default();
-    let first: Vec<String> = rows.lines().nth(1).map(crate::rows::split_csv_line).unwrap_or_default();
-    let field = |name: &str| header.iter().position(|h| h == name).and_then(|i| first.get(i)).cloned().unwrap_or_default();
+    let text = std::fs::read_to_string(run_dir.join(RUNS_CSV)).map_err(|e| io(&run_dir.join(RUNS_CSV), e))?;
+    let rows = schema::row::read_rows(&text).map_err(|e| Error::Input(format!("{}: {e}", run_dir.join(RUNS_CSV).display())))?;
+    let field = |name: &str| rows.first().and_then(|r| r.cell(name)).map(|c| c.to_string()).unwrap_or_default();
     let note = format!(
         "# Baseline `{name}`\n\nSaved from `{}` by `harness baseline save`. Rows: {}. Recorded at commit {} (dirty: {}) on {} \
          ({} logical cores), {}.\n\nCompare a new run with it: `harness check <run dir> --baseline {}`.\n",
         run_dir.display(),
-        rows.lines().count().saturating_sub(1),
+        rows.len(),
         field("git_commit"),
         field("git_dirty"),
         field("cpu_model"),

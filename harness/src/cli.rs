@@ -4,7 +4,8 @@ use std::path::PathBuf;
 
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand};
-use tracer::accel::{AccelKind, Split, Traversal};
+use schema::{Named, SceneName};
+use tracer::accel::{AccelKind, BvhParams, Split, Traversal};
 use tracer::executor::StrategyKind;
 use tracer::scene::SceneKind;
 
@@ -38,9 +39,10 @@ pub enum Command {
     /// Track speedups over commits.
     #[command(subcommand)]
     History(HistoryCommand),
-    /// Internal: time one configuration in a fresh process and print its timing line (used for Embree).
+    /// Internal: time the configuration of the JSON request on stdin in this fresh process and print its timing
+    /// as JSON (used for Embree and `ab`).
     #[command(hide = true)]
-    Worker(WorkerArgs),
+    Worker,
 }
 
 #[derive(Args, Debug)]
@@ -135,18 +137,6 @@ pub enum BaselineCommand {
     },
 }
 
-#[derive(Args, Debug)]
-pub struct WorkerArgs {
-    /// Experiment config (TOML).
-    pub config: PathBuf,
-    /// The configuration to time once.
-    #[arg(long)]
-    pub config_id: String,
-    /// Plan the [quick] version.
-    #[arg(long)]
-    pub quick: bool,
-}
-
 fn parse_shard(s: &str) -> Result<(usize, usize), String> {
     let bad = || format!("{s:?} is not a shard (allowed: I/N with 1 <= I <= N, e.g. 2/4)");
     let (i, n) = s.split_once('/').ok_or_else(bad)?;
@@ -169,44 +159,25 @@ pub struct ValidateArgs {
     pub quick: bool,
 }
 
-/// A parser accepting exactly the kebab-case names of `all` (plus `aliases`), listed in `--help`.
-fn choice<T: Copy + Send + Sync + 'static>(
-    all: &'static [T],
-    name: fn(T) -> &'static str,
-    aliases: &'static [(&'static str, &'static str)],
-) -> impl TypedValueParser<Value = T> {
-    let values = all.iter().map(move |&t| {
-        let n = name(t);
-        aliases.iter().filter(|a| a.1 == n).fold(PossibleValue::new(n), |v, a| v.alias(a.0))
-    });
-    PossibleValuesParser::new(values).map(move |s| {
-        let canonical = aliases.iter().find(|a| a.0 == s).map_or(s.as_str(), |a| a.1);
-        *all.iter().find(|&&t| name(t) == canonical).expect("clap checked the value")
+/// A tracer range as clap takes it.
+fn range(r: std::ops::RangeInclusive<u32>) -> std::ops::RangeInclusive<i64> {
+    i64::from(*r.start())..=i64::from(*r.end())
+}
+
+/// A parser accepting exactly the names of `T` (plus `aliases`), listed in `--help`.
+fn choice<T: Named>(aliases: &'static [(&'static str, T)]) -> impl TypedValueParser<Value = T> {
+    let values = T::ALL.iter().map(move |&t| aliases.iter().filter(|a| a.1 == t).fold(PossibleValue::new(t.name()), |v, a| v.alias(a.0)));
+    PossibleValuesParser::new(values).map(move |s| match aliases.iter().find(|a| a.0 == s) {
+        Some(alias) => alias.1,
+        None => T::from_name(&s).expect("clap checked the value"),
     })
-}
-
-/// Where the spheres come from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SceneChoice {
-    Generated(SceneKind),
-    SphereFile,
-}
-
-const SCENE_CHOICES: [SceneChoice; 3] =
-    [SceneChoice::Generated(SceneKind::RandomSpheres), SceneChoice::Generated(SceneKind::ClusteredSpheres), SceneChoice::SphereFile];
-
-fn scene_name(s: SceneChoice) -> &'static str {
-    match s {
-        SceneChoice::Generated(k) => k.name(),
-        SceneChoice::SphereFile => "sphere-file",
-    }
 }
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {
     /// Scene generator, or `sphere-file` to read `--file`.
-    #[arg(long, default_value = "random-spheres", value_parser = choice(&SCENE_CHOICES, scene_name, &[]))]
-    pub scene: SceneChoice,
+    #[arg(long, default_value = SceneKind::RandomSpheres.name(), value_parser = choice::<SceneName>(&[]))]
+    pub scene: SceneName,
     /// Sphere CSV for `--scene sphere-file` (format: see the tracer's `scene::sphere_file` docs).
     #[arg(long)]
     pub file: Option<PathBuf>,
@@ -217,22 +188,22 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Acceleration structure.
-    #[arg(long, default_value = "flat-bvh", value_parser = choice(&AccelKind::ALL, AccelKind::name, &[]))]
+    #[arg(long, default_value = AccelKind::FlatBvh.name(), value_parser = choice::<AccelKind>(&[]))]
     pub accel: AccelKind,
     /// BVH split rule (`sah` means `binned-sah`).
-    #[arg(long, default_value = "centroid-midpoint", value_parser = choice(&Split::ALL, Split::name, &[("sah", "binned-sah")]))]
+    #[arg(long, default_value = Split::CentroidMidpoint.name(), value_parser = choice(&[("sah", Split::BinnedSah)]))]
     pub split: Split,
-    /// Largest leaf, 1..=16.
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=16))]
+    /// Largest leaf (see `harness list`).
+    #[arg(long, default_value_t = BvhParams::default().max_leaf_size, value_parser = clap::value_parser!(u32).range(range(BvhParams::LEAF_SIZES)))]
     pub leaf_size: u32,
-    /// Bins per axis for binned SAH, 2..=256.
-    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=256))]
+    /// Bins per axis for binned SAH.
+    #[arg(long, default_value_t = BvhParams::default().sah_bins, value_parser = clap::value_parser!(u32).range(range(BvhParams::SAH_BINS)))]
     pub sah_bins: u32,
     /// Child visiting order.
-    #[arg(long, default_value = "fixed", value_parser = choice(&Traversal::ALL, Traversal::name, &[]))]
+    #[arg(long, default_value = Traversal::Fixed.name(), value_parser = choice::<Traversal>(&[]))]
     pub traversal: Traversal,
     /// Parallel strategy.
-    #[arg(long, default_value = "rayon-bands", value_parser = choice(&StrategyKind::ALL, StrategyKind::name, &[]))]
+    #[arg(long, default_value = StrategyKind::RayonBands.name(), value_parser = choice::<StrategyKind>(&[]))]
     pub strategy: StrategyKind,
     /// Worker threads (default: all logical cores).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]

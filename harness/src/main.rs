@@ -20,7 +20,7 @@ use std::process::ExitCode;
 use clap::Parser;
 use report::spec::Verdict;
 
-use cli::{BaselineCommand, CheckArgs, Command, HistoryCommand, ReportArgs, RunArgs, ValidateArgs, WorkerArgs};
+use cli::{BaselineCommand, CheckArgs, Command, HistoryCommand, ReportArgs, RunArgs, ValidateArgs};
 use config::Experiment;
 use error::Error;
 use plan::Plan;
@@ -32,7 +32,7 @@ fn main() -> ExitCode {
         Command::Report(args) => report_command(&args),
         Command::Validate(args) => validate_command(&args),
         Command::Render(args) => render::run(&args),
-        Command::Worker(args) => worker_command(&args),
+        Command::Worker => worker_command(),
         Command::Check(args) => check_command(&args),
         Command::History(HistoryCommand::Append { run_dir, dir }) => history_append(&run_dir, &dir),
         Command::History(HistoryCommand::Plot { dir }) => report::history::plot(&dir)
@@ -89,8 +89,7 @@ fn run_command(args: &RunArgs) -> Result<(), Error> {
         }
     }
     skip_unavailable(&exp, &mut plan, args.require_all)?;
-    let worker = run::WorkerCall { config: args.config.clone(), quick: args.quick };
-    run::sweep(&exp, &plan, &dir, args.resume, &worker)?;
+    run::sweep(&exp, &plan, &dir, args.resume)?;
     let failed = write_report(&dir, &exp, plan.notes.clone())?;
     if failed && args.check_claims {
         return Err(Error::Run("a claim failed (see the claims above and REPORT.md)".into()));
@@ -101,7 +100,7 @@ fn run_command(args: &RunArgs) -> Result<(), Error> {
 /// Drops configurations whose backend cannot run here (Embree absent), with a note for the report; with
 /// `require_all` that is bad input instead.
 fn skip_unavailable(exp: &Experiment, plan: &mut Plan, require_all: bool) -> Result<(), Error> {
-    let needs = |i: usize| plan.configurations[i].settings.peer.is_some_and(|p| p.kind.needs_embree());
+    let needs = |i: usize| plan.configurations[i].settings.peer().is_some_and(schema::PeerKind::needs_embree);
     if !(0..plan.configurations.len()).any(needs) {
         return Ok(());
     }
@@ -142,10 +141,14 @@ fn check_command(args: &CheckArgs) -> Result<(), Error> {
     check::run(&check::CheckRequest { run_dir: &args.run_dir, baseline: &args.baseline, options, json: args.json.clone() })
 }
 
-fn worker_command(args: &WorkerArgs) -> Result<(), Error> {
-    let exp = load(&args.config, args.quick)?;
-    let plan = Plan::new(&exp, render::available_threads())?;
-    println!("{}", run::work(&plan, &args.config_id)?.to_line());
+/// Reads one JSON worker request from stdin, times it, and prints the timing as one JSON line.
+fn worker_command() -> Result<(), Error> {
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut std::io::stdin(), &mut text).map_err(|e| Error::Input(format!("stdin: {e}")))?;
+    let request: run::worker::WorkerRequest =
+        serde_json::from_str(&text).map_err(|e| Error::Input(format!("stdin: not a worker request: {e}")))?;
+    let timing = run::worker::serve(&request)?;
+    println!("{}", serde_json::to_string(&timing).expect("timings serialize"));
     Ok(())
 }
 

@@ -9,7 +9,8 @@ use tracer::executor::Strategy;
 use tracer::render::{Image, RenderSettings, render};
 use tracer::scene::{Scene, sphere_file};
 
-use crate::cli::{RenderArgs, SceneChoice};
+use crate::cli::RenderArgs;
+use schema::SceneName;
 use crate::error::Error;
 
 /// Logical cores available to this process.
@@ -20,8 +21,8 @@ pub fn available_threads() -> usize {
 /// Makes the scene the arguments describe.
 fn scene(args: &RenderArgs) -> Result<Scene, Error> {
     let scene = match args.scene {
-        SceneChoice::Generated(kind) => kind.generate(args.objects, args.seed),
-        SceneChoice::SphereFile => {
+        SceneName::Generated(kind) => kind.generate(args.objects, args.seed),
+        SceneName::SphereFile => {
             let path = args.file.as_ref().ok_or_else(|| Error::Input("--scene sphere-file needs --file PATH".into()))?;
             let text = std::fs::read_to_string(path)
                 .map_err(|e| Error::Input(format!("{}: cannot read: {e}", path.display())))?;

@@ -5,6 +5,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
+use schema::{Named, PeerKind};
+use tracer::accel::{AccelKind, Traversal};
+
 fn harness() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_harness"));
     c.current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap());
@@ -25,12 +28,19 @@ fn stderr(o: &Output) -> String {
 /// Rows of a runs.csv as (config_id, repetition).
 fn recorded(runs: &Path) -> Vec<(String, u32)> {
     let text = std::fs::read_to_string(runs).unwrap();
-    text.lines().skip(1).map(|l| {
-        let f: Vec<&str> = l.split(',').collect();
-        (f[1].to_string(), f[3].parse().unwrap())
-    }).collect()
+    text.lines()
+        .skip(1)
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (f[1].to_string(), f[3].parse().unwrap())
+        })
+        .collect()
 }
 
+/// The accelerator names the configs below use.
+fn names() -> (&'static str, &'static str, &'static str, &'static str) {
+    (AccelKind::List.name(), AccelKind::FlatBvh.name(), PeerKind::Embree.name(), Traversal::FrontToBack.name())
+}
 
 #[test]
 fn bad_configs_exit_2_with_one_line_and_write_nothing() {
@@ -38,18 +48,62 @@ fn bad_configs_exit_2_with_one_line_and_write_nothing() {
     std::fs::write(dir.join("present.csv"), "0,0,0,1\n").unwrap();
     let cases: &[(&str, &str, &str)] = &[
         ("unknown top key", "name = \"t\"\nfoo = 1\n[sweep]\n", "foo: unknown key (allowed: name,"),
-        ("unknown sweep key", "name = \"t\"\n[sweep]\nobects = [1]\n", "sweep.obects: unknown key (allowed: scene, objects,"),
-        ("wrong type", "name = \"t\"\nrepetitions = \"five\"\n[sweep]\n", "repetitions: expected an integer in 1..=1000, found a string"),
-        ("empty sweep", "name = \"t\"\n[sweep]\nobjects = []\n", "sweep.objects: empty list (give at least one value; allowed: integers"),
-        ("unknown accelerator", "name = \"t\"\n[sweep]\naccel = [\"bvh\", \"bhv\"]\n", "sweep.accel[1]: unknown value \"bhv\" (allowed: list, bvh, flat-bvh, obvhs-bvh2, obvhs-cwbvh, embree, embree-packets)"),
-        ("zero threads", "name = \"t\"\n[sweep]\nthreads = [0]\n", "sweep.threads[0]: 0 is out of range (allowed: integers 1..=4096 or all)"),
-        ("leaf size", "name = \"t\"\n[sweep]\nleaf_size = 17\n", "sweep.leaf_size[0]: 17 is out of range (allowed: integers 1..=16)"),
+        (
+            "unknown sweep key",
+            "name = \"t\"\n[sweep]\nobects = [1]\n",
+            "sweep.obects: unknown key (allowed: scene, objects,",
+        ),
+        (
+            "wrong type",
+            "name = \"t\"\nrepetitions = \"five\"\n[sweep]\n",
+            "repetitions: expected an integer in 1..=1000, found a string",
+        ),
+        (
+            "empty sweep",
+            "name = \"t\"\n[sweep]\nobjects = []\n",
+            "sweep.objects: empty list (give at least one value; allowed: integers",
+        ),
+        (
+            "unknown accelerator",
+            "name = \"t\"\n[sweep]\naccel = [\"bvh\", \"bhv\"]\n",
+            "sweep.accel[1]: unknown value \"bhv\" (allowed: list, bvh, flat-bvh, obvhs-bvh2, obvhs-cwbvh, embree, embree-packets)",
+        ),
+        (
+            "zero threads",
+            "name = \"t\"\n[sweep]\nthreads = [0]\n",
+            "sweep.threads[0]: 0 is out of range (allowed: integers 1..=4096 or all)",
+        ),
+        (
+            "leaf size",
+            "name = \"t\"\n[sweep]\nleaf_size = 17\n",
+            "sweep.leaf_size[0]: 17 is out of range (allowed: integers 1..=16)",
+        ),
         ("missing sweep", "name = \"t\"\n", "missing [sweep] table"),
-        ("unreadable sphere file", "name = \"t\"\n[sweep]\nscene = \"sphere-file\"\nsphere_file = \"absent.csv\"\n", "sweep.sphere_file: "),
-        ("bad sphere file", "name = \"t\"\n[sweep]\nscene = \"sphere-file\"\nsphere_file = \"bad.csv\"\n", "bad.csv: line 1, column 4 (r): expected a positive number"),
-        ("unknown reference", "name = \"t\"\nreference = \"nope\"\n[sweep]\n[[series]]\nlabel = \"a\"\n", "reference: unknown series \"nope\" (allowed: a)"),
-        ("bad plot metric", "name = \"t\"\n[sweep]\n[[plot]]\nfile = \"f\"\ny = \"speed\"\n", "plot[0].y: unknown metric \"speed\" (allowed: total_s,"),
-        ("bad order", "name = \"t\"\norder = \"random\"\n[sweep]\n", "order: unknown value \"random\" (allowed: interleaved, sequential, shuffled)"),
+        (
+            "unreadable sphere file",
+            "name = \"t\"\n[sweep]\nscene = \"sphere-file\"\nsphere_file = \"absent.csv\"\n",
+            "sweep.sphere_file: ",
+        ),
+        (
+            "bad sphere file",
+            "name = \"t\"\n[sweep]\nscene = \"sphere-file\"\nsphere_file = \"bad.csv\"\n",
+            "bad.csv: line 1, column 4 (r): expected a positive number",
+        ),
+        (
+            "unknown reference",
+            "name = \"t\"\nreference = \"nope\"\n[sweep]\n[[series]]\nlabel = \"a\"\n",
+            "reference: unknown series \"nope\" (allowed: a)",
+        ),
+        (
+            "bad plot metric",
+            "name = \"t\"\n[sweep]\n[[plot]]\nfile = \"f\"\ny = \"speed\"\n",
+            "plot[0].y: unknown metric \"speed\" (allowed: scene_s, build_s, trace_s, encode_s, total_s,",
+        ),
+        (
+            "bad order",
+            "name = \"t\"\norder = \"random\"\n[sweep]\n",
+            "order: unknown value \"random\" (allowed: interleaved, sequential, shuffled)",
+        ),
         ("invalid toml", "name = \"t\n", "line 1: invalid TOML"),
     ];
     std::fs::write(dir.join("bad.csv"), "0,0,0,-1\n").unwrap();
@@ -57,7 +111,10 @@ fn bad_configs_exit_2_with_one_line_and_write_nothing() {
         let cfg = dir.join("bad.toml");
         std::fs::write(&cfg, text).unwrap();
         let out_dir = dir.join("out");
-        for args in [vec!["run", cfg.to_str().unwrap(), "--out", out_dir.to_str().unwrap()], vec!["validate", cfg.to_str().unwrap()]] {
+        for args in [
+            vec!["run", cfg.to_str().unwrap(), "--out", out_dir.to_str().unwrap()],
+            vec!["validate", cfg.to_str().unwrap()],
+        ] {
             let o = harness().args(&args).output().unwrap();
             let err = stderr(&o);
             assert_eq!(o.status.code(), Some(2), "{what}: {err}");
@@ -86,10 +143,11 @@ fn validate_prints_runs_and_an_estimate() {
 
 #[test]
 fn a_killed_sweep_resumes_without_losing_or_duplicating_rows() {
+    let (list, ..) = names();
     let dir = temp("resume");
     let cfg = dir.join("resume.toml");
     // 3 object counts x 2 seeds x 4 repetitions = 24 rows of a few tens of milliseconds each.
-    std::fs::write(&cfg, "name = \"resume\"\nrepetitions = 4\nwarmups = 1\n[sweep]\naccel = \"list\"\nobjects = [400, 500, 600]\nseed = [1, 2]\nwidth = 96\nheight = 64\n").unwrap();
+    std::fs::write(&cfg, format!("name = \"resume\"\nrepetitions = 4\nwarmups = 1\n[sweep]\naccel = \"{list}\"\nobjects = [400, 500, 600]\nseed = [1, 2]\nwidth = 96\nheight = 64\n")).unwrap();
     let out = dir.join("out");
     let runs = out.join("runs.csv");
     let mut child = harness()
@@ -99,7 +157,9 @@ fn a_killed_sweep_resumes_without_losing_or_duplicating_rows() {
         .spawn()
         .unwrap();
     let start = Instant::now();
-    while std::fs::read_to_string(&runs).map_or(0, |t| t.lines().count()) < 4 && start.elapsed() < Duration::from_secs(120) {
+    while std::fs::read_to_string(&runs).map_or(0, |t| t.lines().count()) < 4
+        && start.elapsed() < Duration::from_secs(120)
+    {
         std::thread::sleep(Duration::from_millis(5));
     }
     child.kill().unwrap();
@@ -108,7 +168,8 @@ fn a_killed_sweep_resumes_without_losing_or_duplicating_rows() {
     assert!(before.len() >= 3, "rows were flushed as runs finished");
     assert!(before.len() < 24, "the kill came before the end ({} rows); make the runs longer", before.len());
 
-    let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--resume"]).output().unwrap();
+    let o =
+        harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--resume"]).output().unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     let after = recorded(&runs);
     assert_eq!(after.len(), 24, "no row lost");
@@ -117,13 +178,15 @@ fn a_killed_sweep_resumes_without_losing_or_duplicating_rows() {
     assert!(out.join("REPORT.md").exists());
 
     // Resuming a complete sweep runs nothing more.
-    let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--resume"]).output().unwrap();
+    let o =
+        harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--resume"]).output().unwrap();
     assert!(o.status.success());
     assert_eq!(recorded(&runs).len(), 24);
 
     // Resuming with another config is refused.
     std::fs::write(&cfg, "name = \"resume\"\nrepetitions = 5\n[sweep]\nobjects = [400]\n").unwrap();
-    let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--resume"]).output().unwrap();
+    let o =
+        harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--resume"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
 }
 
@@ -131,7 +194,8 @@ fn a_killed_sweep_resumes_without_losing_or_duplicating_rows() {
 fn quick_paper_experiment_end_to_end() {
     let dir = temp("paper");
     let out = dir.join("paper");
-    let o = harness().args(["run", "experiments/paper.toml", "--quick", "--out", out.to_str().unwrap()]).output().unwrap();
+    let o =
+        harness().args(["run", "experiments/paper.toml", "--quick", "--out", out.to_str().unwrap()]).output().unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     let rows = recorded(&out.join("runs.csv"));
     assert_eq!(rows.len(), 6 * 4 * 3, "6 series x 4 object counts x 1 seed x 3 repetitions");
@@ -139,7 +203,9 @@ fn quick_paper_experiment_end_to_end() {
     for must in ["time-vs-objects", "speedup-vs-objects", "flat BVH is within 10%", "serial·list"] {
         assert!(report.contains(must), "REPORT.md lacks {must:?}");
     }
-    for f in ["runs.parquet", "summary.csv", "summary.parquet", "figures/time-vs-objects.svg", "figures/time-vs-objects.png"] {
+    for f in
+        ["runs.parquet", "summary.csv", "summary.parquet", "figures/time-vs-objects.svg", "figures/time-vs-objects.png"]
+    {
         assert!(out.join(f).is_file(), "{f} missing");
     }
     // Every row's image hash is the same for every series at the same scene: all structures and strategies agree.
@@ -149,7 +215,9 @@ fn quick_paper_experiment_end_to_end() {
     let mut by_scene = std::collections::HashMap::new();
     for l in text.lines().skip(1) {
         let f: Vec<&str> = l.split(',').collect();
-        let prev = by_scene.entry((f[col("objects")].to_string(), f[col("seed")].to_string())).or_insert(f[col("image_hash")].to_string());
+        let prev = by_scene
+            .entry((f[col("objects")].to_string(), f[col("seed")].to_string()))
+            .or_insert(f[col("image_hash")].to_string());
         assert_eq!(*prev, f[col("image_hash")], "all series render the same image");
     }
     // The report can be rebuilt from the rows alone.
@@ -161,17 +229,20 @@ fn quick_paper_experiment_end_to_end() {
 
 #[test]
 fn check_claims_exits_1_when_a_claim_fails() {
+    let (list, flat, ..) = names();
     let dir = temp("claims");
     let cfg = dir.join("claims.toml");
     std::fs::write(
         &cfg,
-        "name = \"claims\"\nrepetitions = 2\n[sweep]\nobjects = 300\nwidth = 48\nheight = 32\nworkload = \"primary\"\n\
-         [[series]]\nlabel = \"list\"\naccel = \"list\"\n[[series]]\nlabel = \"bvh\"\naccel = \"flat-bvh\"\n\
-         [[claim]]\ntext = \"the list is 1000x faster than the BVH\"\nkind = \"faster\"\nseries = \"list\"\nthan = \"bvh\"\nfactor = 1000\n",
+        format!("name = \"claims\"\nrepetitions = 2\n[sweep]\nobjects = 300\nwidth = 48\nheight = 32\nworkload = \"primary\"\n\
+         [[series]]\nlabel = \"brute\"\naccel = \"{list}\"\n[[series]]\nlabel = \"tree\"\naccel = \"{flat}\"\n\
+         [[claim]]\ntext = \"the list is 1000x faster than the BVH\"\nkind = \"faster\"\nseries = \"brute\"\nthan = \"tree\"\nfactor = 1000\n"),
     )
     .unwrap();
     let out = dir.join("out");
-    let run = |extra: &[&str]| harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]).args(extra).output().unwrap();
+    let run = |extra: &[&str]| {
+        harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]).args(extra).output().unwrap()
+    };
     let o = run(&[]);
     assert!(o.status.success(), "without --check-claims a failed claim is reported, not fatal: {}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("claim FAILS"));
@@ -181,18 +252,25 @@ fn check_claims_exits_1_when_a_claim_fails() {
 
 #[test]
 fn a_missing_embree_is_reported_skipped_or_refused() {
+    let (_, flat, embree, _) = names();
     let dir = temp("noembree");
     let cfg = dir.join("peers.toml");
     std::fs::write(
         &cfg,
-        "name = \"noembree\"\n[sweep]\nobjects = 100\nwidth = 32\nheight = 24\nworkload = \"primary\"\n\
-         [[series]]\nlabel = \"ours\"\naccel = \"flat-bvh\"\n[[series]]\nlabel = \"embree\"\naccel = \"embree\"\n",
+        format!(
+            "name = \"noembree\"\n[sweep]\nobjects = 100\nwidth = 32\nheight = 24\nworkload = \"primary\"\n\
+         [[series]]\nlabel = \"ours\"\naccel = \"{flat}\"\n[[series]]\nlabel = \"embree\"\naccel = \"{embree}\"\n"
+        ),
     )
     .unwrap();
-    let without = |args: &[&str]| harness().env("EMBREE_LIB", dir.join("no-such-libembree4.so")).args(args).output().unwrap();
+    let without =
+        |args: &[&str]| harness().env("EMBREE_LIB", dir.join("no-such-libembree4.so")).args(args).output().unwrap();
     let o = without(&["list"]);
     let listed = String::from_utf8_lossy(&o.stdout);
-    assert!(listed.contains("embree, embree-packets: unavailable") && listed.contains("pip install embreex==4.4.0.post1"), "{listed}");
+    assert!(
+        listed.contains("embree, embree-packets: unavailable") && listed.contains("pip install embreex==4.4.0.post1"),
+        "{listed}"
+    );
     let out = dir.join("out");
     let o = without(&["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -209,9 +287,10 @@ fn a_missing_embree_is_reported_skipped_or_refused() {
 
 #[test]
 fn baseline_save_and_check_bad_input() {
+    let (list, flat, ..) = names();
     let dir = temp("baseline");
     let cfg = dir.join("b.toml");
-    std::fs::write(&cfg, "name = \"b\"\nreference = \"list\"\nrepetitions = 3\n[sweep]\nobjects = 200\nwidth = 32\nheight = 24\nworkload = \"primary\"\n[[series]]\nlabel = \"list\"\naccel = \"list\"\n[[series]]\nlabel = \"bvh\"\naccel = \"flat-bvh\"\n").unwrap();
+    std::fs::write(&cfg, format!("name = \"b\"\nreference = \"brute\"\nrepetitions = 3\n[sweep]\nobjects = 200\nwidth = 32\nheight = 24\nworkload = \"primary\"\n[[series]]\nlabel = \"brute\"\naccel = \"{list}\"\n[[series]]\nlabel = \"tree\"\naccel = \"{flat}\"\n")).unwrap();
     let run_dir = dir.join("run");
     let o = harness().args(["run", cfg.to_str().unwrap(), "--out", run_dir.to_str().unwrap()]).output().unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
@@ -226,23 +305,45 @@ fn baseline_save_and_check_bad_input() {
     };
     assert!(save(false).status.success());
     assert!(dir.join("results/baselines/b-test/runs.csv").is_file());
-    assert!(std::fs::read_to_string(dir.join("results/baselines/b-test/BASELINE.md")).unwrap().contains("Recorded at commit"));
+    assert!(
+        std::fs::read_to_string(dir.join("results/baselines/b-test/BASELINE.md"))
+            .unwrap()
+            .contains("Recorded at commit")
+    );
     let o = save(false);
     assert_eq!(o.status.code(), Some(2), "never overwrite without --force");
     assert!(stderr(&o).contains("baseline exists; use --force"));
     assert!(save(true).status.success());
 
     let baseline = dir.join("results/baselines/b-test");
-    let check = |run: &Path, base: &Path| harness().args(["check", run.to_str().unwrap(), "--baseline", base.to_str().unwrap()]).output().unwrap();
+    let check = |run: &Path, base: &Path| {
+        harness().args(["check", run.to_str().unwrap(), "--baseline", base.to_str().unwrap()]).output().unwrap()
+    };
     let o = check(&run_dir, &baseline);
-    assert!(o.status.success(), "a run checked against its own baseline passes: {}{}", String::from_utf8_lossy(&o.stdout), stderr(&o));
+    assert!(
+        o.status.success(),
+        "a run checked against its own baseline passes: {}{}",
+        String::from_utf8_lossy(&o.stdout),
+        stderr(&o)
+    );
     assert!(run_dir.join("check.json").is_file());
     let o = check(&dir.join("nowhere"), &baseline);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("nowhere: no runs.csv here"), "{}", stderr(&o));
     let other = dir.join("other");
-    std::fs::write(dir.join("o.toml"), "name = \"other\"\n[sweep]\nobjects = 10\nwidth = 8\nheight = 8\nworkload = \"primary\"\n").unwrap();
-    assert!(harness().args(["run", dir.join("o.toml").to_str().unwrap(), "--out", other.to_str().unwrap()]).output().unwrap().status.success());
+    std::fs::write(
+        dir.join("o.toml"),
+        "name = \"other\"\n[sweep]\nobjects = 10\nwidth = 8\nheight = 8\nworkload = \"primary\"\n",
+    )
+    .unwrap();
+    assert!(
+        harness()
+            .args(["run", dir.join("o.toml").to_str().unwrap(), "--out", other.to_str().unwrap()])
+            .output()
+            .unwrap()
+            .status
+            .success()
+    );
     let o = check(&other, &baseline);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("does not match the baseline"), "{}", stderr(&o));
@@ -250,17 +351,29 @@ fn baseline_save_and_check_bad_input() {
 
 #[test]
 fn ab_against_head_reports_ratios_near_one() {
+    let (_, flat, _, front_to_back) = names();
     // Builds HEAD in a worktree under target/ab/ (a few minutes on a clean machine), then times a tiny config
     // with both builds, interleaved. The working tree's code is HEAD's or a small change of it: no regression.
     let dir = temp("ab");
     let cfg = dir.join("ab.toml");
-    std::fs::write(&cfg, "name = \"ab\"\nrepetitions = 6\nwarmups = 1\n[sweep]\naccel = \"flat-bvh\"\ntraversal = \"front-to-back\"\nobjects = 3000\nwidth = 96\nheight = 64\nworkload = \"primary\"\n").unwrap();
+    std::fs::write(&cfg, format!("name = \"ab\"\nrepetitions = 6\nwarmups = 1\n[sweep]\naccel = \"{flat}\"\ntraversal = \"{front_to_back}\"\nobjects = 3000\nwidth = 96\nheight = 64\nworkload = \"primary\"\n")).unwrap();
     let o = harness().args(["ab", "--base", "HEAD", cfg.to_str().unwrap()]).output().unwrap();
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{out}\n{}", stderr(&o));
     assert!(out.contains("| default | random-spheres objects 3000 serial |"), "{out}");
     assert!(out.contains("| same |"), "both builds answer alike: {out}");
-    let ratio: f64 = out.lines().find(|l| l.starts_with("| default")).unwrap().split('|').nth(5).unwrap().split_whitespace().next().unwrap().parse().unwrap();
+    let ratio: f64 = out
+        .lines()
+        .find(|l| l.starts_with("| default"))
+        .unwrap()
+        .split('|')
+        .nth(5)
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
     assert!((0.7..1.4).contains(&ratio), "new/old near 1, got {ratio}: {out}");
     let o = harness().args(["ab", "--base", "no-such-revision", cfg.to_str().unwrap()]).output().unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));

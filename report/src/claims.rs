@@ -3,6 +3,7 @@
 use crate::pool::{self, Point};
 use crate::rows::Rows;
 use crate::spec::{ClaimKind, ClaimSpec, ReportSpec, Verdict};
+use crate::stats::Estimate;
 
 /// A checked claim.
 #[derive(Clone, Debug, PartialEq)]
@@ -33,7 +34,42 @@ pub fn check(rows: &Rows, spec: &ReportSpec, claim: &ClaimSpec) -> ClaimResult {
     let (series, than) = match &claim.kind {
         ClaimKind::Faster { series, than, .. } | ClaimKind::Within { series, than, .. } => (series, than),
     };
-    // Every point of every curve (a curve per thread count etc. when those vary within the series).
+    let (points, labels) = collect_points(rows, spec, claim, series, than);
+    if points.is_empty() {
+        return no_points(claim, series, than);
+    }
+    let judged: Vec<Judged> = points.iter().map(|p| judge(&claim.kind, p)).collect();
+    let worst = least_favourable(&judged);
+    let estimate = points[worst].estimate;
+    ClaimResult {
+        text: claim.text.clone(),
+        verdict: overall(&judged),
+        ratio: estimate.value,
+        lo: estimate.lo,
+        hi: estimate.hi,
+        threshold: judged[worst].threshold,
+        detail: describe(&judged, &labels[worst]),
+    }
+}
+
+/// One point judged against its claim.
+struct Judged {
+    /// The factor the ratio must reach (`Faster`) or the tolerance (`Within`).
+    threshold: f64,
+    /// How far the point is from failing: larger is safer, compared holds-side end first.
+    safety: (f64, f64),
+    /// The point's own verdict.
+    verdict: Verdict,
+}
+
+/// Every in-range point of every curve (one per thread count etc. varying in the series), with its label.
+fn collect_points(
+    rows: &Rows,
+    spec: &ReportSpec,
+    claim: &ClaimSpec,
+    series: &str,
+    than: &str,
+) -> (Vec<Point>, Vec<String>) {
     let in_range = |p: &Point| {
         claim.min_objects.is_none_or(|min| p.x >= min as f64) && claim.max_objects.is_none_or(|max| p.x <= max as f64)
     };
@@ -49,95 +85,103 @@ pub fn check(rows: &Rows, spec: &ReportSpec, claim: &ClaimSpec) -> ClaimResult {
             }
         }
     }
-    let mut result = ClaimResult {
+    (points, labels)
+}
+
+/// The inconclusive result of a claim no point matched, saying why.
+fn no_points(claim: &ClaimSpec, series: &str, than: &str) -> ClaimResult {
+    ClaimResult {
         text: claim.text.clone(),
         verdict: Verdict::Inconclusive,
         ratio: f64::NAN,
         lo: f64::NAN,
         hi: f64::NAN,
-        threshold: f64::NAN,
-        detail: String::new(),
-    };
-    if points.is_empty() {
-        result.threshold = match claim.kind {
+        threshold: match claim.kind {
             ClaimKind::Faster { factor, .. } => factor,
             ClaimKind::Within { tolerance, .. } => tolerance,
-        };
-        result.detail = format!(
+        },
+        detail: format!(
             "no points: no `{}` rows of {series} with matching {than} rows{}",
             claim.metric,
             objects_range(claim)
-        );
-        return result;
+        ),
     }
+}
 
-    // Each point's (threshold, how far it is from failing: larger is safer, holds-side first).
-    let judged: Vec<(f64, (f64, f64), Verdict)> = points
-        .iter()
-        .map(|p| {
-            let e = p.estimate;
-            match claim.kind {
-                ClaimKind::Faster { factor, per_thread, .. } => {
-                    let threshold = if per_thread { factor * p.threads } else { factor };
-                    let verdict = if e.lo >= threshold {
-                        Verdict::Holds
-                    } else if e.hi < threshold {
-                        Verdict::Fails
-                    } else {
-                        Verdict::Inconclusive
-                    };
-                    (threshold, (e.lo / threshold, e.hi / threshold), verdict)
-                }
-                ClaimKind::Within { tolerance, .. } => {
-                    let (low, high) = (1.0 - tolerance, 1.0 + tolerance);
-                    let verdict = if e.lo >= low && e.hi <= high {
-                        Verdict::Holds
-                    } else if e.hi < low || e.lo > high {
-                        Verdict::Fails
-                    } else {
-                        Verdict::Inconclusive
-                    };
-                    // Distance of the interval's far and near ends from 1, negated: nearer is safer.
-                    let far = (e.lo - 1.0).abs().max((e.hi - 1.0).abs());
-                    let near =
-                        if e.lo <= 1.0 && 1.0 <= e.hi { 0.0 } else { (e.lo - 1.0).abs().min((e.hi - 1.0).abs()) };
-                    (tolerance, (-near, -far), verdict)
-                }
-            }
-        })
-        .collect();
+/// Judges one point against the claim kind.
+fn judge(kind: &ClaimKind, point: &Point) -> Judged {
+    match *kind {
+        ClaimKind::Faster { factor, per_thread, .. } => {
+            judge_faster(point.estimate, if per_thread { factor * point.threads } else { factor })
+        }
+        ClaimKind::Within { tolerance, .. } => judge_within(point.estimate, tolerance),
+    }
+}
 
-    result.verdict = if judged.iter().any(|j| j.2 == Verdict::Fails) {
-        Verdict::Fails
-    } else if judged.iter().all(|j| j.2 == Verdict::Holds) {
+/// `Faster`: holds when the interval lies at or above `threshold`, fails when entirely below it.
+fn judge_faster(e: Estimate, threshold: f64) -> Judged {
+    let verdict = if e.lo >= threshold {
         Verdict::Holds
+    } else if e.hi < threshold {
+        Verdict::Fails
     } else {
         Verdict::Inconclusive
     };
-    let worst = (0..points.len())
+    Judged { threshold, safety: (e.lo / threshold, e.hi / threshold), verdict }
+}
+
+/// `Within`: holds when the interval lies inside `1 ± tolerance`, fails when entirely outside it.
+fn judge_within(e: Estimate, tolerance: f64) -> Judged {
+    let (low, high) = (1.0 - tolerance, 1.0 + tolerance);
+    let verdict = if e.lo >= low && e.hi <= high {
+        Verdict::Holds
+    } else if e.hi < low || e.lo > high {
+        Verdict::Fails
+    } else {
+        Verdict::Inconclusive
+    };
+    // Distance of the interval's far and near ends from 1, negated: nearer is safer.
+    let far = (e.lo - 1.0).abs().max((e.hi - 1.0).abs());
+    let near = if e.lo <= 1.0 && 1.0 <= e.hi { 0.0 } else { (e.lo - 1.0).abs().min((e.hi - 1.0).abs()) };
+    Judged { threshold: tolerance, safety: (-near, -far), verdict }
+}
+
+/// The claim's verdict: fails if any point fails, holds if every point holds, inconclusive otherwise.
+fn overall(judged: &[Judged]) -> Verdict {
+    if judged.iter().any(|j| j.verdict == Verdict::Fails) {
+        Verdict::Fails
+    } else if judged.iter().all(|j| j.verdict == Verdict::Holds) {
+        Verdict::Holds
+    } else {
+        Verdict::Inconclusive
+    }
+}
+
+/// Index of the least safe point (the first of equals); `judged` must not be empty.
+fn least_favourable(judged: &[Judged]) -> usize {
+    (0..judged.len())
         .min_by(|&a, &b| {
-            let (ka, kb) = (judged[a].1, judged[b].1);
+            let (ka, kb) = (judged[a].safety, judged[b].safety);
             ka.0.total_cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
         })
-        .expect("points is not empty");
-    let point = &points[worst];
-    result.ratio = point.estimate.value;
-    result.lo = point.estimate.lo;
-    result.hi = point.estimate.hi;
-    result.threshold = judged[worst].0;
-    let counts = |v: Verdict| judged.iter().filter(|j| j.2 == v).count();
-    result.detail = format!(
+        .expect("points is not empty")
+}
+
+/// How many points were compared, how they came out, and where the least favourable one is.
+fn describe(judged: &[Judged], worst_label: &str) -> String {
+    let counts = |v: Verdict| judged.iter().filter(|j| j.verdict == v).count();
+    format!(
         "{} point{} ({} hold, {} fail, {} inconclusive); least favourable at {}",
-        points.len(),
-        if points.len() == 1 { "" } else { "s" },
+        judged.len(),
+        if judged.len() == 1 { "" } else { "s" },
         counts(Verdict::Holds),
         counts(Verdict::Fails),
         counts(Verdict::Inconclusive),
-        labels[worst]
-    );
-    result
+        worst_label
+    )
 }
 
+/// The claim's object range in words (` with at least 1000 objects`), empty without one.
 fn objects_range(claim: &ClaimSpec) -> String {
     match (claim.min_objects, claim.max_objects) {
         (None, None) => String::new(),

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use tracer::fingerprint::Fnv64;
 
-use crate::check::{COUNTERS, CheckOptions, speedups};
+use crate::check::{CheckOptions, counters, speedups};
 use crate::csv::{field as quote, split_line as split};
 use crate::error::Error;
 use crate::figures::chart::{self, Chart, ChartPoint, Line};
@@ -77,7 +77,7 @@ pub fn append(run_dir: &Path, spec: &ReportSpec, history_dir: &Path, options: &C
     let mut h = Fnv64::default();
     for (id, r) in &by_config {
         h.bytes(id.as_bytes());
-        for c in COUNTERS {
+        for c in counters() {
             h.bytes(r.text(c).as_bytes()).bytes(b"|");
         }
     }

@@ -114,55 +114,54 @@ fn max_threads(group: &[&Run]) -> f64 {
     group.iter().map(|run| run.num("threads")).fold(f64::NAN, f64::max)
 }
 
-/// Curves of `metric` against `x` for one series, each point pooled over seeds.
-pub fn metric_curves(runs: &[Run], series: &str, x: &str, metric: &str) -> Vec<Curve> {
+/// The curves of `series` against `x`, each point estimated by `estimate(fixed, x value, runs there)`.
+fn curves_with(
+    runs: &[Run],
+    series: &str,
+    x: &str,
+    estimate: impl Fn(&str, f64, &[&Run]) -> Option<stats::Estimate>,
+) -> Vec<Curve> {
     curves_of(runs, series, x)
         .into_iter()
         .map(|(fixed, groups)| {
             let points = groups
                 .into_iter()
                 .filter_map(|(xv, group)| {
-                    let values = samples(group.iter().copied(), metric);
-                    if values.is_empty() {
-                        return None;
-                    }
-                    let key = format!("{series}|{fixed}|{x}={xv}|{metric}");
-                    let estimate = stats::median_ci(&values, stats::seed_for(&key));
+                    let estimate = estimate(&fixed, xv, &group)?;
                     Some(Point { x: xv, estimate, threads: max_threads(&group) })
                 })
                 .collect();
             Curve { fixed, points }
         })
         .collect()
+}
+
+/// Curves of `metric` against `x` for one series, each point pooled over seeds.
+pub fn metric_curves(runs: &[Run], series: &str, x: &str, metric: &str) -> Vec<Curve> {
+    curves_with(runs, series, x, |fixed, xv, group| {
+        let values = samples(group.iter().copied(), metric);
+        let key = format!("{series}|{fixed}|{x}={xv}|{metric}");
+        (!values.is_empty()).then(|| stats::median_ci(&values, stats::seed_for(&key)))
+    })
 }
 
 /// Curves of `metric(other) / metric(series)` against `x`, each point pooled over seeds; `other`'s
 /// samples at a point are the counterparts (see [`matches`]) of the series' runs there, seeds ignored.
 pub fn ratio_curves(spec: &ReportSpec, runs: &[Run], other: &str, series: &str, x: &str, metric: &str) -> Vec<Curve> {
-    curves_of(runs, series, x)
-        .into_iter()
-        .map(|(fixed, groups)| {
-            let points = groups
-                .into_iter()
-                .filter_map(|(xv, group)| {
-                    let key = format!("{other}/{series}|{fixed}|{x}={xv}|{metric}");
-                    let estimate = ratio_against(spec, runs, other, &group, metric, &["seed"], &key)?;
-                    Some(Point { x: xv, estimate, threads: max_threads(&group) })
-                })
-                .collect();
-            Curve { fixed, points }
-        })
-        .collect()
+    curves_with(runs, series, x, |fixed, xv, group| {
+        let key = format!("{other}/{series}|{fixed}|{x}={xv}|{metric}");
+        ratio_against(spec, runs, other, group, metric, &["seed"], &key)
+    })
 }
 
-/// Runs grouped by configuration with seeds pooled: series plus every setting except `seed`,
-/// in order of first appearance.
+/// The key of a run's seed pool: series plus every setting except `seed` (see `schema::row::pool_key`).
+pub fn pool_key(run: &Run) -> Vec<String> {
+    schema::row::pool_key(run.series(), |column| run.text(column).to_string())
+}
+
+/// Runs grouped by configuration with seeds pooled (see [`pool_key`]), in order of first appearance.
 pub fn seed_pools(runs: &[Run]) -> Vec<Vec<&Run>> {
-    let key = |run: &Run| {
-        let mut parts = vec![run.series().to_string()];
-        parts.extend(SETTINGS.iter().filter(|c| **c != "seed").map(|c| run.text(c).to_string()));
-        parts
-    };
+    let key = pool_key;
     let mut pools: Vec<(Vec<String>, Vec<&Run>)> = Vec::new();
     for run in runs {
         let k = key(run);

@@ -11,25 +11,17 @@ use crate::stats;
 /// Metrics summarised per configuration.
 pub const METRICS: [&str; 4] = ["total_s", "trace_s", "build_s", "mrays_per_s"];
 
-/// Columns equal in every repetition of a configuration, carried from the first one.
-const DETERMINISTIC: [&str; 9] = [
-    "rays",
-    "nodes_per_ray",
-    "box_tests_per_ray",
-    "prim_tests_per_ray",
-    "tree_nodes",
-    "tree_depth",
-    "tree_bytes",
-    "sah_cost",
-    "image_hash",
-];
+/// Columns equal in every repetition of a configuration (the schema's counters), carried from the first one.
+fn deterministic() -> Vec<&'static str> {
+    schema::row::counter_names()
+}
 
 /// Statistics per metric, in column order (`<metric>_<stat>`).
 const STATS: [&str; 7] = ["mean", "median", "std", "min", "max", "median_lo", "median_hi"];
 
 /// One row per configuration (first-appearance order) with the columns described in the crate docs.
 pub fn summarise(rows: &Rows, spec: &ReportSpec) -> PolarsResult<DataFrame> {
-    let mut aggs: Vec<Expr> = ["experiment", "series"].iter().chain(&SETTINGS).map(|c| col(*c).first()).collect();
+    let mut aggs: Vec<Expr> = ["experiment", "series"].iter().chain(SETTINGS.iter()).map(|c| col(*c).first()).collect();
     aggs.push(len().cast(DataType::Int64).alias("n"));
     for metric in METRICS {
         aggs.push(col(metric).mean().alias(format!("{metric}_mean")));
@@ -38,7 +30,7 @@ pub fn summarise(rows: &Rows, spec: &ReportSpec) -> PolarsResult<DataFrame> {
         aggs.push(col(metric).min().alias(format!("{metric}_min")));
         aggs.push(col(metric).max().alias(format!("{metric}_max")));
     }
-    aggs.extend(DETERMINISTIC.iter().map(|c| col(*c).first()));
+    aggs.extend(deterministic().into_iter().map(|c| col(c).first()));
     let mut frame = rows.frame.clone().lazy().group_by_stable([col("config_id")]).agg(aggs).collect()?;
 
     let ids: Vec<String> = frame.column("config_id")?.str()?.iter().map(|id| id.unwrap_or("").to_string()).collect();
@@ -74,12 +66,12 @@ pub fn summarise(rows: &Rows, spec: &ReportSpec) -> PolarsResult<DataFrame> {
 /// The summary's columns in output order.
 fn column_order() -> Vec<String> {
     let mut names: Vec<String> =
-        ["config_id", "experiment", "series"].iter().chain(&SETTINGS).map(|c| c.to_string()).collect();
+        ["config_id", "experiment", "series"].iter().chain(SETTINGS.iter()).map(|c| c.to_string()).collect();
     names.push("n".into());
     for metric in METRICS {
         names.extend(STATS.iter().map(|stat| format!("{metric}_{stat}")));
     }
-    names.extend(DETERMINISTIC.iter().map(|c| c.to_string()));
+    names.extend(deterministic().into_iter().map(String::from));
     names.extend(["speedup", "speedup_lo", "speedup_hi"].map(String::from));
     names
 }

@@ -28,7 +28,7 @@ fn tree_params() -> Vec<AccelParams> {
 
 fn label(p: &AccelParams) -> String {
     match p.kind {
-        AccelKind::List => "list".into(),
+        AccelKind::List => AccelKind::List.name().into(),
         k => format!("{}/{}/{}", k.name(), p.bvh.split.name(), p.bvh.traversal.name()),
     }
 }

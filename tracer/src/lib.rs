@@ -7,6 +7,9 @@
 //! - [`render`] shades full Whitted images or runs the primary-ray kernel;
 //! - [`rays`] holds fixed ray sets (primary, shadow, diffuse) traced identically by every backend.
 //!
+//! With the `testing` feature (and in this crate's own tests), `testing` holds the agreement check against
+//! brute force, the ray mixes and the test scenes that every backend's tests share.
+//!
 //! The crate does no file or terminal I/O; [`render::Image::write_png`] encodes into any writer.
 
 pub mod accel;
@@ -18,5 +21,7 @@ pub mod rays;
 pub mod render;
 pub mod rng;
 pub mod scene;
+#[cfg(any(test, feature = "testing"))]
+pub mod testing;
 
 pub use glam::Vec3;

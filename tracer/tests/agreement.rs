@@ -1,11 +1,10 @@
 //! Every accelerator × split × leaf size × traversal order returns the same answers as brute force.
 
-mod common;
-
 use glam::Vec3;
 use proptest::prelude::*;
 use tracer::geometry::Sphere;
 use tracer::scene::SceneKind;
+use tracer::testing;
 
 fn arbitrary_spheres() -> impl Strategy<Value = Vec<Sphere>> {
     let coord = -50.0f32..50.0;
@@ -20,14 +19,14 @@ proptest! {
     fn generated_scenes_agree_with_brute_force(clustered in any::<bool>(), objects in 0usize..400, seed in any::<u64>()) {
         let kind = if clustered { SceneKind::ClusteredSpheres } else { SceneKind::RandomSpheres };
         let scene = kind.generate(objects, seed);
-        let rays = common::ray_mix(&scene.spheres, seed ^ 0x5eed, 240);
-        common::assert_every_tree_agrees(kind.name(), &scene.spheres, &rays);
+        let rays = testing::sphere_ray_mix(&scene.spheres, seed ^ 0x5eed, 240);
+        testing::assert_every_tree_agrees(kind.name(), &scene.spheres, &rays);
     }
 
     #[test]
     fn arbitrary_spheres_agree_with_brute_force(spheres in arbitrary_spheres(), ray_seed in any::<u64>()) {
-        let rays = common::ray_mix(&spheres, ray_seed, 240);
-        common::assert_every_tree_agrees("arbitrary", &spheres, &rays);
+        let rays = testing::sphere_ray_mix(&spheres, ray_seed, 240);
+        testing::assert_every_tree_agrees("arbitrary", &spheres, &rays);
     }
 }
 
@@ -36,5 +35,13 @@ fn camera_rays_agree_on_the_papers_scene() {
     let scene = SceneKind::RandomSpheres.generate(1000, 1);
     let cam = scene.camera.with_resolution(40, 30).rays();
     let rays: Vec<_> = (0..30).flat_map(|y| (0..40).map(move |x| (x, y))).map(|(x, y)| cam.ray(x, y)).collect();
-    common::assert_every_tree_agrees("paper scene camera rays", &scene.spheres, &rays);
+    testing::assert_every_tree_agrees("paper scene camera rays", &scene.spheres, &rays);
+}
+
+#[test]
+fn every_tree_agrees_on_the_peer_test_scenes() {
+    // The scenes and ray mix (camera, grazing, secondary rays) the peers are checked on.
+    for scene in testing::scenes() {
+        testing::assert_every_tree_agrees(&scene.label, &scene.spheres, &scene.rays);
+    }
 }

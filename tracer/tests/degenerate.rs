@@ -1,7 +1,5 @@
 //! Degenerate inputs: empty and single-sphere scenes, coincident spheres, extreme radii, deep trees.
 
-mod common;
-
 use glam::Vec3;
 use tracer::accel::{AccelKind, AccelParams, Accelerator, BuiltAccel, BvhParams, Split};
 use tracer::counters::NoCounters;
@@ -9,12 +7,13 @@ use tracer::executor::Strategy;
 use tracer::geometry::{Ray, Sphere};
 use tracer::render::{RenderSettings, render};
 use tracer::scene::SceneKind;
+use tracer::testing;
 
 #[test]
 fn empty_scene_misses_everything_and_renders() {
-    let rays = common::ray_mix(&[], 3, 60);
-    common::assert_every_tree_agrees("empty", &[], &rays);
-    for params in common::every_tree().into_iter().take(8) {
+    let rays = testing::sphere_ray_mix(&[], 3, 60);
+    testing::assert_every_tree_agrees("empty", &[], &rays);
+    for params in testing::every_tree().into_iter().take(8) {
         let accel = BuiltAccel::build(&[], &params);
         assert!(rays.iter().all(|r| accel.visit(MissesAll(*r))));
         assert_eq!(accel.stats().nodes, 1);
@@ -38,7 +37,7 @@ impl tracer::accel::AccelVisitor for MissesAll {
 #[test]
 fn single_sphere() {
     let spheres = [Sphere::new(Vec3::new(0.0, 1.0, -5.0), 1.0)];
-    common::assert_every_tree_agrees("one sphere", &spheres, &common::ray_mix(&spheres, 4, 300));
+    testing::assert_every_tree_agrees("one sphere", &spheres, &testing::sphere_ray_mix(&spheres, 4, 300));
     let accel = BuiltAccel::build(&spheres, &AccelParams::default());
     let hit = accel.visit(Closest(Ray::new(Vec3::new(0.0, 1.0, 0.0), -Vec3::Z))).unwrap();
     assert_eq!((hit.t, hit.prim), (4.0, 0));
@@ -55,9 +54,9 @@ impl tracer::accel::AccelVisitor for Closest {
 #[test]
 fn all_spheres_at_one_point() {
     let same: Vec<Sphere> = (0..100).map(|_| Sphere::new(Vec3::new(1.0, 2.0, 3.0), 0.5)).collect();
-    common::assert_every_tree_agrees("coincident", &same, &common::ray_mix(&same, 5, 300));
+    testing::assert_every_tree_agrees("coincident", &same, &testing::sphere_ray_mix(&same, 5, 300));
     let nested: Vec<Sphere> = (1..=100).map(|i| Sphere::new(Vec3::new(1.0, 2.0, 3.0), i as f32 * 0.1)).collect();
-    common::assert_every_tree_agrees("concentric", &nested, &common::ray_mix(&nested, 6, 300));
+    testing::assert_every_tree_agrees("concentric", &nested, &testing::sphere_ray_mix(&nested, 6, 300));
 }
 
 #[test]
@@ -65,7 +64,7 @@ fn huge_and_tiny_radii() {
     let mut spheres: Vec<Sphere> = (0..50).map(|i| Sphere::new(Vec3::new(i as f32, 0.5, -10.0 - i as f32), 1e-5)).collect();
     spheres.push(Sphere::new(Vec3::ZERO, 1e6)); // contains every ray origin below
     spheres.push(Sphere::new(Vec3::new(3.0, 1e4, -2.0), 1e3));
-    common::assert_every_tree_agrees("extreme radii", &spheres, &common::ray_mix(&spheres, 7, 400));
+    testing::assert_every_tree_agrees("extreme radii", &spheres, &testing::sphere_ray_mix(&spheres, 7, 400));
 }
 
 #[test]
@@ -80,5 +79,5 @@ fn exponentially_spaced_spheres_stay_within_the_traversal_stack() {
         }
     }
     let rays: Vec<Ray> = (0..120).map(|i| Ray::new(Vec3::new(1.3f32.powi(i), 5.0, 0.0), -Vec3::Y)).collect();
-    common::assert_every_tree_agrees("exponential", &spheres, &rays);
+    testing::assert_every_tree_agrees("exponential", &spheres, &rays);
 }

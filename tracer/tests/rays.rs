@@ -1,12 +1,11 @@
 //! Ray sets are deterministic, sized as promised, and every tree and strategy answers them like brute force.
 
-mod common;
-
 use tracer::accel::{AccelParams, AccelVisitor, Accelerator, BuiltAccel, FlatBvh, List};
 use tracer::counters::{NoCounters, WorkCounters};
 use tracer::executor::{Strategy, StrategyKind};
 use tracer::rays::{RayAnswers, RayKind, RaySet, trace};
 use tracer::scene::{Scene, SceneKind};
+use tracer::testing;
 
 fn scene(kind: SceneKind) -> Scene {
     let mut s = kind.generate(700, 5);
@@ -47,7 +46,7 @@ fn every_tree_and_strategy_answers_ray_sets_like_brute_force() {
         let list = List::build(&s.spheres);
         for k in RayKind::ALL {
             let set = RaySet::generate(k, &s, &list, 7);
-            common::assert_every_tree_agrees(&format!("{kind:?} {k:?}"), &s.spheres, &set.rays);
+            testing::assert_every_tree_agrees(&format!("{kind:?} {k:?}"), &s.spheres, &set.rays);
             let (want, counters) = trace::<_, WorkCounters>(&list, &set, &Strategy::SERIAL);
             assert_eq!(counters.rays as usize, set.rays.len());
             let flat = BuiltAccel::build(&s.spheres, &AccelParams::default());

@@ -1,22 +1,22 @@
 //! Experiment configs: TOML files naming sweep axes, series, exclusions, quick overrides, plots and claims.
 //!
 //! Every key is checked; a wrong key, type or value is one line naming the file, the key path and what is
-//! allowed (see [`table::Section`]). Nothing here touches the results folder.
+//! allowed (see [`table::Section`]). Axes parse straight into typed values ([`schema::AxisValue`]); nothing
+//! here touches the results folder.
 
-pub mod axes;
 mod table;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use report::spec::{ClaimKind, ClaimSpec, PlotKind, PlotSpec, ReportSpec};
+use schema::{Axis, AxisValue, Raw};
 
 use crate::error::Error;
-use axes::{Axis, Value, axis_keys};
 use table::Section;
 
 /// Values per axis.
-pub type AxisValues = BTreeMap<Axis, Vec<Value>>;
+pub type AxisValues = BTreeMap<Axis, Vec<AxisValue>>;
 
 /// The order in which runs are executed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -44,6 +44,14 @@ pub struct Exclude {
     pub axes: AxisValues,
 }
 
+/// The `[quick]` overrides: repetitions, warm-ups and sweep axes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Quick {
+    pub repetitions: Option<u32>,
+    pub warmups: Option<u32>,
+    pub sweep: AxisValues,
+}
+
 /// A parsed, checked experiment.
 #[derive(Clone, Debug)]
 pub struct Experiment {
@@ -63,20 +71,44 @@ pub struct Experiment {
     pub sphere_file: Option<PathBuf>,
     pub series: Vec<Series>,
     pub exclude: Vec<Exclude>,
-    /// The `[quick]` overrides: repetitions, warm-ups and sweep axes.
-    pub quick: Option<(Option<u32>, Option<u32>, AxisValues)>,
+    pub quick: Option<Quick>,
     pub plots: Vec<PlotSpec>,
     pub claims: Vec<ClaimSpec>,
 }
 
 const TOP_KEYS: &[&str] = &[
-    "name", "description", "reference", "repetitions", "warmups", "order", "order_seed", "sweep", "series", "exclude",
-    "quick", "plot", "claim",
+    "name",
+    "description",
+    "reference",
+    "repetitions",
+    "warmups",
+    "order",
+    "order_seed",
+    "sweep",
+    "series",
+    "exclude",
+    "quick",
+    "plot",
+    "claim",
 ];
-const METRICS: &[&str] = &[
-    "total_s", "trace_s", "build_s", "scene_s", "encode_s", "mrays_per_s", "nodes_per_ray", "box_tests_per_ray",
-    "prim_tests_per_ray", "sah_cost",
-];
+
+/// Keys of all axes, for "allowed keys" messages.
+fn axis_keys() -> String {
+    Axis::ALL.iter().map(|a| a.key()).collect::<Vec<_>>().join(", ")
+}
+
+/// The metrics a plot or claim may name.
+fn metrics() -> Vec<&'static str> {
+    schema::row::plottable_names()
+}
+
+/// Checks that `name` is a file-safe identifier.
+fn identifier(s: &Section<'_>, key: &str, name: &str, what: &str) -> Result<(), Error> {
+    if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_') {
+        return Err(s.error(key, format!("{name:?} is not a valid {what} (allowed: letters, digits, '-', '_')")));
+    }
+    Ok(())
+}
 
 /// Reads axis lists (`key = [values]` or `key = value`) from `s`, skipping `skip` keys.
 fn axis_values(s: &Section<'_>, skip: &[&str]) -> Result<AxisValues, Error> {
@@ -87,8 +119,7 @@ fn axis_values(s: &Section<'_>, skip: &[&str]) -> Result<AxisValues, Error> {
             skip.iter().for_each(|k| allowed.push_str(&format!(", {k}")));
             s.error(key, format!("unknown key (allowed: {allowed})"))
         })?;
-        let raw = s.get(key).expect("key listed");
-        let items: Vec<&toml::Value> = match raw {
+        let items: Vec<&toml::Value> = match s.get(key).expect("key listed") {
             toml::Value::Array(a) => a.iter().collect(),
             one => vec![one],
         };
@@ -98,7 +129,18 @@ fn axis_values(s: &Section<'_>, skip: &[&str]) -> Result<AxisValues, Error> {
         let values = items
             .into_iter()
             .enumerate()
-            .map(|(i, v)| axis.parse(v).map_err(|m| s.error(&format!("{key}[{i}]"), m)))
+            .map(|(i, v)| {
+                let raw = match v {
+                    toml::Value::Integer(i) => Raw::Int(*i),
+                    toml::Value::Float(x) => Raw::Float(*x),
+                    toml::Value::String(s) => Raw::Str(s),
+                    other => {
+                        let found = format!("expected a string or number, found a {}", other.type_str());
+                        return Err(s.error(&format!("{key}[{i}]"), format!("{found} (allowed: {})", axis.allowed())));
+                    }
+                };
+                axis.parse(raw).map_err(|m| s.error(&format!("{key}[{i}]"), m))
+            })
             .collect::<Result<Vec<_>, _>>()?;
         out.insert(axis, values);
     }
@@ -115,11 +157,24 @@ fn filter(s: &Section<'_>) -> Result<Vec<(String, Vec<String>)>, Error> {
         .collect())
 }
 
+/// The series labels of a config, for checking the keys that name one.
+struct Labels(Vec<String>);
+
+impl Labels {
+    fn check(&self, s: &Section<'_>, key: &str, label: &str) -> Result<(), Error> {
+        if self.0.iter().any(|l| l == label) {
+            Ok(())
+        } else {
+            Err(s.error(key, format!("unknown series {label:?} (allowed: {})", self.0.join(", "))))
+        }
+    }
+}
+
 impl Experiment {
     /// Reads and checks the config at `path`.
     pub fn load(path: &Path) -> Result<Self, Error> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| Error::Input(format!("{}: cannot read: {e}", path.display())))?;
+        let text =
+            std::fs::read_to_string(path).map_err(|e| Error::Input(format!("{}: cannot read: {e}", path.display())))?;
         Self::parse(path, &text)
     }
 
@@ -132,206 +187,59 @@ impl Experiment {
         })?;
         let top = Section::root(&file, &root);
         top.only(TOP_KEYS)?;
-
         let name = top.required_string("name")?.to_string();
-        if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_') {
-            return Err(top.error("name", format!("{name:?} is not a valid name (allowed: letters, digits, '-', '_')")));
-        }
-        let order = match top.string("order")? {
-            None | Some("interleaved") => RunOrder::Interleaved,
-            Some("sequential") => RunOrder::Sequential,
-            Some("shuffled") => RunOrder::Shuffled,
-            Some(o) => return Err(top.error("order", format!("unknown value {o:?} (allowed: interleaved, sequential, shuffled)"))),
-        };
+        identifier(&top, "name", &name, "name")?;
         let sweep_section = top.section("sweep")?.ok_or_else(|| top.error_here("missing [sweep] table"))?;
-        let sweep = axis_values(&sweep_section, &["sphere_file"])?;
-        let sphere_file = sweep_section.string("sphere_file")?.map(|f| path.parent().unwrap_or(Path::new(".")).join(f));
-
-        let mut series = Vec::new();
-        for s in top.sections("series")? {
-            let label = s.required_string("label")?.to_string();
-            if series.iter().any(|x: &Series| x.label == label) {
-                return Err(s.error("label", format!("duplicate series label {label:?}")));
-            }
-            series.push(Series { label, fixed: axis_values(&s, &["label"])? });
-        }
-        let labels: Vec<&str> = series.iter().map(|s| s.label.as_str()).collect();
-        let known_label = |s: &Section<'_>, key: &str, label: &str| -> Result<(), Error> {
-            if labels.contains(&label) {
-                Ok(())
-            } else {
-                Err(s.error(key, format!("unknown series {label:?} (allowed: {})", labels.join(", "))))
-            }
-        };
-
+        let series = parse_series(&top)?;
+        let labels = Labels(series.iter().map(|s| s.label.clone()).collect());
         let reference = top.string("reference")?.map(str::to_string);
         if let Some(r) = &reference {
-            known_label(&top, "reference", r)?;
+            labels.check(&top, "reference", r)?;
         }
-        let mut exclude = Vec::new();
-        for s in top.sections("exclude")? {
-            let only_series = s.strings("series")?;
-            for l in only_series.iter().flatten() {
-                known_label(&s, "series", l)?;
-            }
-            let axes = axis_values(&s, &["series"])?;
-            if axes.is_empty() && only_series.is_none() {
-                return Err(s.error_here(format!("empty [[exclude]] would skip every run (give keys: series, {})", axis_keys())));
-            }
-            exclude.push(Exclude { series: only_series, axes });
-        }
-        let quick = match top.section("quick")? {
-            None => None,
-            Some(q) => {
-                let reps = q.integer("repetitions", 1, 1000)?.map(|v| v as u32);
-                let warm = q.integer("warmups", 0, 100)?.map(|v| v as u32);
-                Some((reps, warm, axis_values(&q, &["repetitions", "warmups"])?))
-            }
-        };
-
-        let mut plots = Vec::new();
-        for p in top.sections("plot")? {
-            p.only(&["file", "title", "kind", "x", "y", "log_x", "log_y", "series", "where"])?;
-            let file = p.required_string("file")?.to_string();
-            if file.is_empty() || !file.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_') {
-                return Err(p.error("file", format!("{file:?} is not a valid file stem (allowed: letters, digits, '-', '_')")));
-            }
-            let kind = match p.string("kind")? {
-                None | Some("metric") => PlotKind::Metric,
-                Some("speedup") => PlotKind::Speedup,
-                Some("efficiency") => PlotKind::Efficiency,
-                Some(k) => return Err(p.error("kind", format!("unknown value {k:?} (allowed: metric, speedup, efficiency)"))),
-            };
-            if kind != PlotKind::Metric && reference.is_none() {
-                return Err(p.error("kind", "speedup and efficiency plots need a top-level `reference` series"));
-            }
-            let x = p.string("x")?.unwrap_or(if kind == PlotKind::Efficiency { "threads" } else { "objects" }).to_string();
-            if Axis::from_key(&x).is_none() {
-                return Err(p.error("x", format!("unknown column {x:?} (allowed: {})", axis_keys())));
-            }
-            let y = p.string("y")?.unwrap_or("total_s").to_string();
-            if !METRICS.contains(&y.as_str()) {
-                return Err(p.error("y", format!("unknown metric {y:?} (allowed: {})", METRICS.join(", "))));
-            }
-            let series = p.strings("series")?.unwrap_or_default();
-            for l in &series {
-                known_label(&p, "series", l)?;
-            }
-            let title = p.string("title")?.unwrap_or(&file).to_string();
-            let (log_x, log_y) = (p.boolean("log_x")?.unwrap_or(false), p.boolean("log_y")?.unwrap_or(false));
-            let filter = filter(&p)?;
-            plots.push(PlotSpec { file, title, kind, x, y, log_x, log_y, series, filter });
-        }
-
-        let mut claims = Vec::new();
-        for c in top.sections("claim")? {
-            c.only(&["text", "paper", "kind", "series", "than", "factor", "per_thread", "tolerance", "metric", "min_objects", "max_objects", "where"])?;
-            let text = c.required_string("text")?.to_string();
-            let series = c.required_string("series")?.to_string();
-            let than = c.required_string("than")?.to_string();
-            known_label(&c, "series", &series)?;
-            known_label(&c, "than", &than)?;
-            let kind = match c.string("kind")? {
-                Some("faster") => ClaimKind::Faster {
-                    series,
-                    than,
-                    factor: c.number("factor", 0.0, 1e9)?.ok_or_else(|| c.error_here("missing key \"factor\" (a number) for kind = \"faster\""))?,
-                    per_thread: c.boolean("per_thread")?.unwrap_or(false),
-                },
-                Some("within") => ClaimKind::Within {
-                    series,
-                    than,
-                    tolerance: c.number("tolerance", 0.0, 10.0)?.ok_or_else(|| c.error_here("missing key \"tolerance\" (a number) for kind = \"within\""))?,
-                },
-                Some(k) => return Err(c.error("kind", format!("unknown value {k:?} (allowed: faster, within)"))),
-                None => return Err(c.error_here("missing key \"kind\" (allowed: faster, within)")),
-            };
-            let metric = c.string("metric")?.unwrap_or("total_s").to_string();
-            if !METRICS.contains(&metric.as_str()) {
-                return Err(c.error("metric", format!("unknown metric {metric:?} (allowed: {})", METRICS.join(", "))));
-            }
-            let objects = |k| c.integer(k, 0, i64::MAX).map(|v| v.map(|v| v as u64));
-            claims.push(ClaimSpec {
-                text,
-                paper: c.string("paper")?.map(str::to_string),
-                kind,
-                metric,
-                min_objects: objects("min_objects")?,
-                max_objects: objects("max_objects")?,
-                filter: filter(&c)?,
-            });
-        }
-
         Ok(Experiment {
             path: path.to_path_buf(),
             text: text.to_string(),
             description: top.string("description")?.unwrap_or("").to_string(),
             repetitions: top.integer("repetitions", 1, 1000)?.unwrap_or(1) as u32,
             warmups: top.integer("warmups", 0, 100)?.unwrap_or(0) as u32,
+            order: parse_order(&top)?,
             order_seed: top.integer("order_seed", 0, i64::MAX)?.unwrap_or(0) as u64,
+            sweep: axis_values(&sweep_section, &["sphere_file"])?,
+            sphere_file: sweep_section.string("sphere_file")?.map(|f| path.parent().unwrap_or(Path::new(".")).join(f)),
+            exclude: parse_excludes(&top, &labels)?,
+            quick: parse_quick(&top)?,
+            plots: top
+                .sections("plot")?
+                .iter()
+                .map(|p| parse_plot(p, &labels, reference.is_some()))
+                .collect::<Result<_, _>>()?,
+            claims: top.sections("claim")?.iter().map(|c| parse_claim(c, &labels)).collect::<Result<_, _>>()?,
             name,
             reference,
-            order,
-            sweep,
-            sphere_file,
             series,
-            exclude,
-            quick,
-            plots,
-            claims,
         })
     }
 
     /// The same experiment with its `[quick]` overrides applied (unchanged when it has none).
     pub fn quick(mut self) -> Self {
-        if let Some((reps, warm, axes)) = self.quick.take() {
-            self.repetitions = reps.unwrap_or(self.repetitions);
-            self.warmups = warm.unwrap_or(self.warmups);
-            self.sweep.extend(axes);
+        if let Some(q) = self.quick.take() {
+            self.repetitions = q.repetitions.unwrap_or(self.repetitions);
+            self.warmups = q.warmups.unwrap_or(self.warmups);
+            self.sweep.extend(q.sweep);
         }
         self
     }
 
-    /// Columns a series fixes, counting those its fixed values make irrelevant (serial fixes threads at 1;
-    /// each kind of accelerator leaves the other kinds' settings at `-`), so that speedup matching
-    /// ignores them.
-    fn fixed_columns(s: &Series) -> Vec<String> {
-        let all_in = |a: Axis, names: &[&str]| {
-            s.fixed.get(&a).is_some_and(|v| v.iter().all(|x| matches!(x, Value::Name(n) if names.contains(n))))
-        };
-        let tree = [Axis::Split, Axis::LeafSize, Axis::SahBins, Axis::Traversal];
-        let mut axes: Vec<Axis> = s.fixed.keys().copied().collect();
-        if all_in(Axis::Strategy, &["serial"]) {
-            axes.push(Axis::Threads);
-        }
-        if all_in(Axis::Split, &["centroid-midpoint", "object-median", "sweep-sah"]) {
-            axes.push(Axis::SahBins);
-        }
-        if all_in(Axis::Accel, &["list"]) {
-            axes.extend(tree);
-        }
-        if all_in(Axis::Accel, &["list", "bvh", "flat-bvh", "embree", "embree-packets"]) {
-            axes.push(Axis::ObvhsBuild);
-        }
-        if all_in(Axis::Accel, &["list", "bvh", "flat-bvh", "obvhs-bvh2", "obvhs-cwbvh"]) {
-            axes.extend([Axis::EmbreeBuild, Axis::EmbreeIsa]);
-        }
-        if all_in(Axis::Accel, &["obvhs-bvh2", "obvhs-cwbvh", "embree", "embree-packets"]) {
-            axes.extend(tree);
-        }
-        axes.sort();
-        axes.dedup();
-        axes.into_iter().map(|a| a.key().to_string()).collect()
-    }
-
     /// What the report needs from this experiment.
     pub fn report_spec(&self, notes: Vec<String>) -> ReportSpec {
+        let fixed =
+            |s: &Series| schema::applicability::fixed_axes(&s.fixed).into_iter().map(|a| a.key().to_string()).collect();
         ReportSpec {
             name: self.name.clone(),
             description: self.description.clone(),
             reference: self.reference.clone(),
             series: self.series.iter().map(|s| s.label.clone()).collect(),
-            series_fixed: self.series.iter().map(|s| (s.label.clone(), Self::fixed_columns(s))).collect(),
+            series_fixed: self.series.iter().map(|s| (s.label.clone(), fixed(s))).collect(),
             plots: self.plots.clone(),
             claims: self.claims.clone(),
             config_text: self.text.clone(),
@@ -340,18 +248,193 @@ impl Experiment {
     }
 }
 
+/// `order`.
+fn parse_order(top: &Section<'_>) -> Result<RunOrder, Error> {
+    Ok(match top.string("order")? {
+        None | Some("interleaved") => RunOrder::Interleaved,
+        Some("sequential") => RunOrder::Sequential,
+        Some("shuffled") => RunOrder::Shuffled,
+        Some(o) => {
+            return Err(top.error("order", format!("unknown value {o:?} (allowed: interleaved, sequential, shuffled)")));
+        }
+    })
+}
+
+/// `[[series]]` tables.
+fn parse_series(top: &Section<'_>) -> Result<Vec<Series>, Error> {
+    let mut series: Vec<Series> = Vec::new();
+    for s in top.sections("series")? {
+        let label = s.required_string("label")?.to_string();
+        if series.iter().any(|x| x.label == label) {
+            return Err(s.error("label", format!("duplicate series label {label:?}")));
+        }
+        series.push(Series { label, fixed: axis_values(&s, &["label"])? });
+    }
+    Ok(series)
+}
+
+/// `[[exclude]]` tables.
+fn parse_excludes(top: &Section<'_>, labels: &Labels) -> Result<Vec<Exclude>, Error> {
+    let mut exclude = Vec::new();
+    for s in top.sections("exclude")? {
+        let only_series = s.strings("series")?;
+        for l in only_series.iter().flatten() {
+            labels.check(&s, "series", l)?;
+        }
+        let axes = axis_values(&s, &["series"])?;
+        if axes.is_empty() && only_series.is_none() {
+            return Err(
+                s.error_here(format!("empty [[exclude]] would skip every run (give keys: series, {})", axis_keys()))
+            );
+        }
+        exclude.push(Exclude { series: only_series, axes });
+    }
+    Ok(exclude)
+}
+
+/// `[quick]`.
+fn parse_quick(top: &Section<'_>) -> Result<Option<Quick>, Error> {
+    let Some(q) = top.section("quick")? else { return Ok(None) };
+    Ok(Some(Quick {
+        repetitions: q.integer("repetitions", 1, 1000)?.map(|v| v as u32),
+        warmups: q.integer("warmups", 0, 100)?.map(|v| v as u32),
+        sweep: axis_values(&q, &["repetitions", "warmups"])?,
+    }))
+}
+
+/// A metric key (`y` of a plot, `metric` of a claim), `total_s` when absent.
+fn metric(s: &Section<'_>, key: &str) -> Result<String, Error> {
+    let m = s.string(key)?.unwrap_or("total_s").to_string();
+    if !metrics().contains(&m.as_str()) {
+        return Err(s.error(key, format!("unknown metric {m:?} (allowed: {})", metrics().join(", "))));
+    }
+    Ok(m)
+}
+
+/// One `[[plot]]` table.
+fn parse_plot(p: &Section<'_>, labels: &Labels, has_reference: bool) -> Result<PlotSpec, Error> {
+    p.only(&["file", "title", "kind", "x", "y", "log_x", "log_y", "series", "where"])?;
+    let file = p.required_string("file")?.to_string();
+    identifier(p, "file", &file, "file stem")?;
+    let kind = match p.string("kind")? {
+        None | Some("metric") => PlotKind::Metric,
+        Some("speedup") => PlotKind::Speedup,
+        Some("efficiency") => PlotKind::Efficiency,
+        Some(k) => return Err(p.error("kind", format!("unknown value {k:?} (allowed: metric, speedup, efficiency)"))),
+    };
+    if kind != PlotKind::Metric && !has_reference {
+        return Err(p.error("kind", "speedup and efficiency plots need a top-level `reference` series"));
+    }
+    let default_x = if kind == PlotKind::Efficiency { Axis::threads } else { Axis::objects };
+    let x = p.string("x")?.unwrap_or(default_x.key()).to_string();
+    if Axis::from_key(&x).is_none() {
+        return Err(p.error("x", format!("unknown column {x:?} (allowed: {})", axis_keys())));
+    }
+    let series = p.strings("series")?.unwrap_or_default();
+    for l in &series {
+        labels.check(p, "series", l)?;
+    }
+    Ok(PlotSpec {
+        title: p.string("title")?.unwrap_or(&file).to_string(),
+        file,
+        kind,
+        x,
+        y: metric(p, "y")?,
+        log_x: p.boolean("log_x")?.unwrap_or(false),
+        log_y: p.boolean("log_y")?.unwrap_or(false),
+        series,
+        filter: filter(p)?,
+    })
+}
+
+/// One `[[claim]]` table.
+fn parse_claim(c: &Section<'_>, labels: &Labels) -> Result<ClaimSpec, Error> {
+    c.only(&[
+        "text",
+        "paper",
+        "kind",
+        "series",
+        "than",
+        "factor",
+        "per_thread",
+        "tolerance",
+        "metric",
+        "min_objects",
+        "max_objects",
+        "where",
+    ])?;
+    let text = c.required_string("text")?.to_string();
+    let series = c.required_string("series")?.to_string();
+    let than = c.required_string("than")?.to_string();
+    labels.check(c, "series", &series)?;
+    labels.check(c, "than", &than)?;
+    let missing = |key: &str, kind: &str| c.error_here(format!("missing key {key:?} (a number) for kind = {kind:?}"));
+    let kind = match c.string("kind")? {
+        Some("faster") => ClaimKind::Faster {
+            series,
+            than,
+            factor: c.number("factor", 0.0, 1e9)?.ok_or_else(|| missing("factor", "faster"))?,
+            per_thread: c.boolean("per_thread")?.unwrap_or(false),
+        },
+        Some("within") => ClaimKind::Within {
+            series,
+            than,
+            tolerance: c.number("tolerance", 0.0, 10.0)?.ok_or_else(|| missing("tolerance", "within"))?,
+        },
+        Some(k) => return Err(c.error("kind", format!("unknown value {k:?} (allowed: faster, within)"))),
+        None => return Err(c.error_here("missing key \"kind\" (allowed: faster, within)")),
+    };
+    let objects = |k| c.integer(k, 0, i64::MAX).map(|v| v.map(|v| v as u64));
+    Ok(ClaimSpec {
+        text,
+        paper: c.string("paper")?.map(str::to_string),
+        kind,
+        metric: metric(c, "metric")?,
+        min_objects: objects("min_objects")?,
+        max_objects: objects("max_objects")?,
+        filter: filter(c)?,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use schema::{Accel, Named};
+    use tracer::accel::{AccelKind, Traversal};
+    use tracer::executor::StrategyKind;
 
     #[test]
     fn series_fix_the_columns_their_accelerator_makes_irrelevant() {
-        let text = "name = \"t\"\n[sweep]\n[[series]]\nlabel = \"ours\"\naccel = \"flat-bvh\"\ntraversal = \"front-to-back\"\n\
-                    [[series]]\nlabel = \"o\"\naccel = \"obvhs-bvh2\"\n[[series]]\nlabel = \"s\"\nstrategy = \"serial\"\naccel = \"list\"\n";
-        let spec = Experiment::parse(Path::new("t.toml"), text).unwrap().report_spec(vec![]);
+        let (flat, obvhs, list) = (
+            AccelKind::FlatBvh.name(),
+            Accel::ALL.iter().find(|a| a.peer().is_some_and(|p| p.is_obvhs())).unwrap().name(),
+            AccelKind::List.name(),
+        );
+        let (f2b, serial) = (Traversal::FrontToBack.name(), StrategyKind::Serial.name());
+        let text = format!(
+            "name = \"t\"\n[sweep]\n[[series]]\nlabel = \"ours\"\naccel = \"{flat}\"\ntraversal = \"{f2b}\"\n\
+             [[series]]\nlabel = \"o\"\naccel = \"{obvhs}\"\n[[series]]\nlabel = \"s\"\nstrategy = \"{serial}\"\naccel = \"{list}\"\n"
+        );
+        let spec = Experiment::parse(Path::new("t.toml"), &text).unwrap().report_spec(vec![]);
         let fixed = |l: &str| spec.series_fixed[l].join(",");
         assert_eq!(fixed("ours"), "accel,traversal,obvhs_build,embree_build,embree_isa");
         assert_eq!(fixed("o"), "accel,split,leaf_size,sah_bins,traversal,embree_build,embree_isa");
-        assert_eq!(fixed("s"), "accel,split,leaf_size,sah_bins,traversal,strategy,threads,obvhs_build,embree_build,embree_isa");
+        assert_eq!(
+            fixed("s"),
+            "accel,split,leaf_size,sah_bins,traversal,strategy,threads,obvhs_build,embree_build,embree_isa"
+        );
+    }
+
+    #[test]
+    fn float_axes_take_integers_and_floats_and_reject_names() {
+        let ok = Experiment::parse(Path::new("t.toml"), "name = \"t\"\n[sweep]\nwidth = 8\n").unwrap();
+        assert_eq!(ok.sweep[&Axis::width], vec![AxisValue::width(8)]);
+        let e = Experiment::parse(Path::new("t.toml"), "name = \"t\"\n[sweep]\nleaf_size = [4, 17]\n")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "t.toml: sweep.leaf_size[1]: 17 is out of range (allowed: integers 1..=16)");
+        let e =
+            Experiment::parse(Path::new("t.toml"), "name = \"t\"\n[sweep]\nwidth = true\n").unwrap_err().to_string();
+        assert!(e.contains("sweep.width[0]: expected a string or number, found a boolean"), "{e}");
     }
 }

@@ -54,7 +54,9 @@ impl<'a> Section<'a> {
     fn typed<T>(&self, key: &str, want: &str, f: impl Fn(&'a Value) -> Option<T>) -> Result<Option<T>, Error> {
         match self.table.get(key) {
             None => Ok(None),
-            Some(v) => f(v).map(Some).ok_or_else(|| self.error(key, format!("expected {want}, found a {}", v.type_str()))),
+            Some(v) => {
+                f(v).map(Some).ok_or_else(|| self.error(key, format!("expected {want}, found a {}", v.type_str())))
+            }
         }
     }
 
@@ -76,7 +78,9 @@ impl<'a> Section<'a> {
     /// An optional integer in `lo..=hi`.
     pub fn integer(&self, key: &str, lo: i64, hi: i64) -> Result<Option<i64>, Error> {
         match self.typed(key, &format!("an integer in {lo}..={hi}"), Value::as_integer)? {
-            Some(v) if !(lo..=hi).contains(&v) => Err(self.error(key, format!("{v} is out of range (allowed: {lo}..={hi})"))),
+            Some(v) if !(lo..=hi).contains(&v) => {
+                Err(self.error(key, format!("{v} is out of range (allowed: {lo}..={hi})")))
+            }
             v => Ok(v),
         }
     }
@@ -85,7 +89,9 @@ impl<'a> Section<'a> {
     pub fn number(&self, key: &str, lo: f64, hi: f64) -> Result<Option<f64>, Error> {
         let as_f64 = |v: &Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
         match self.typed(key, &format!("a number in {lo}..={hi}"), as_f64)? {
-            Some(v) if !(lo..=hi).contains(&v) => Err(self.error(key, format!("{v} is out of range (allowed: {lo}..={hi})"))),
+            Some(v) if !(lo..=hi).contains(&v) => {
+                Err(self.error(key, format!("{v} is out of range (allowed: {lo}..={hi})")))
+            }
             v => Ok(v),
         }
     }
@@ -99,7 +105,11 @@ impl<'a> Section<'a> {
         };
         items
             .into_iter()
-            .map(|i| i.as_str().map(str::to_string).ok_or_else(|| self.error(key, format!("expected strings, found a {}", i.type_str()))))
+            .map(|i| {
+                i.as_str()
+                    .map(str::to_string)
+                    .ok_or_else(|| self.error(key, format!("expected strings, found a {}", i.type_str())))
+            })
             .collect::<Result<Vec<_>, _>>()
             .map(Some)
     }
@@ -113,12 +123,16 @@ impl<'a> Section<'a> {
     /// An optional array of tables (`[[key]]`), each with its index in the path.
     pub fn sections(&self, key: &str) -> Result<Vec<Section<'a>>, Error> {
         let Some(v) = self.table.get(key) else { return Ok(vec![]) };
-        let arr = v.as_array().ok_or_else(|| self.error(key, format!("expected [[{key}]] tables, found a {}", v.type_str())))?;
+        let arr = v
+            .as_array()
+            .ok_or_else(|| self.error(key, format!("expected [[{key}]] tables, found a {}", v.type_str())))?;
         arr.iter()
             .enumerate()
             .map(|(i, item)| {
                 let path = format!("{}[{i}]", self.key_path(key));
-                let table = item.as_table().ok_or_else(|| Error::Input(format!("{}: {path}: expected a table, found a {}", self.file, item.type_str())))?;
+                let table = item.as_table().ok_or_else(|| {
+                    Error::Input(format!("{}: {path}: expected a table, found a {}", self.file, item.type_str()))
+                })?;
                 Ok(Section { file: self.file, path, table })
             })
             .collect()

@@ -13,65 +13,22 @@ use obvhs::bvh2::node::Bvh2Node;
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::ray::{Ray as ObvhsRay, RayHit};
-use serde::{Deserialize, Serialize};
+use schema::ObvhsQuality;
 use tracer::accel::bvh::sah;
 use tracer::accel::{Accelerator, Hit, TreeStats};
 use tracer::counters::Counters;
 use tracer::Vec3;
 use tracer::geometry::{Ray, Sphere};
 
-/// obvhs 0.4's build presets (`BvhBuildParams::*_build()`); `pre_split` only applies to triangles.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ObvhsQuality {
-    /// `BvhBuildParams::fastest_build()`.
-    Fastest,
-    /// `BvhBuildParams::very_fast_build()`.
-    VeryFast,
-    /// `BvhBuildParams::fast_build()`.
-    Fast,
-    /// `BvhBuildParams::medium_build()` ("around Embree's build time, faster traversal").
-    #[default]
-    Medium,
-    /// `BvhBuildParams::slow_build()`.
-    Slow,
-    /// `BvhBuildParams::very_slow_build()`.
-    VerySlow,
-}
-
-impl ObvhsQuality {
-    /// Every preset, fastest build first.
-    pub const ALL: [ObvhsQuality; 6] = [
-        ObvhsQuality::Fastest,
-        ObvhsQuality::VeryFast,
-        ObvhsQuality::Fast,
-        ObvhsQuality::Medium,
-        ObvhsQuality::Slow,
-        ObvhsQuality::VerySlow,
-    ];
-
-    /// The kebab-case name used in configs.
-    pub fn name(self) -> &'static str {
-        match self {
-            ObvhsQuality::Fastest => "fastest",
-            ObvhsQuality::VeryFast => "very-fast",
-            ObvhsQuality::Fast => "fast",
-            ObvhsQuality::Medium => "medium",
-            ObvhsQuality::Slow => "slow",
-            ObvhsQuality::VerySlow => "very-slow",
-        }
-    }
-
-    /// The preset's build parameters.
-    pub fn params(self) -> BvhBuildParams {
-        match self {
-            ObvhsQuality::Fastest => BvhBuildParams::fastest_build(),
-            ObvhsQuality::VeryFast => BvhBuildParams::very_fast_build(),
-            ObvhsQuality::Fast => BvhBuildParams::fast_build(),
-            ObvhsQuality::Medium => BvhBuildParams::medium_build(),
-            ObvhsQuality::Slow => BvhBuildParams::slow_build(),
-            ObvhsQuality::VerySlow => BvhBuildParams::very_slow_build(),
-        }
+/// The build parameters of an obvhs preset (`BvhBuildParams::*_build()`; `pre_split` only applies to triangles).
+pub fn preset(quality: ObvhsQuality) -> BvhBuildParams {
+    match quality {
+        ObvhsQuality::Fastest => BvhBuildParams::fastest_build(),
+        ObvhsQuality::VeryFast => BvhBuildParams::very_fast_build(),
+        ObvhsQuality::Fast => BvhBuildParams::fast_build(),
+        ObvhsQuality::Medium => BvhBuildParams::medium_build(),
+        ObvhsQuality::Slow => BvhBuildParams::slow_build(),
+        ObvhsQuality::VerySlow => BvhBuildParams::very_slow_build(),
     }
 }
 
@@ -128,7 +85,7 @@ impl ObvhsBvh2 {
             return Self { bvh: Bvh2::default(), spheres: Vec::new() };
         }
         let mut build_time = Duration::ZERO;
-        let bvh = obvhs::bvh2::builder::build_bvh2(&boxes(spheres), quality.params(), &mut build_time);
+        let bvh = obvhs::bvh2::builder::build_bvh2(&boxes(spheres), preset(quality), &mut build_time);
         let spheres = reordered(spheres, &bvh.primitive_indices);
         Self { bvh, spheres }
     }
@@ -202,7 +159,7 @@ impl ObvhsCwbvh {
             return Self { bvh: None, spheres: Vec::new() };
         }
         let mut build_time = Duration::ZERO;
-        let bvh = obvhs::cwbvh::builder::build_cwbvh(&boxes(spheres), quality.params(), &mut build_time);
+        let bvh = obvhs::cwbvh::builder::build_cwbvh(&boxes(spheres), preset(quality), &mut build_time);
         let spheres = reordered(spheres, &bvh.primitive_indices);
         Self { bvh: Some(bvh), spheres }
     }
@@ -264,26 +221,29 @@ impl Accelerator for ObvhsCwbvh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::peers::testing::{Tolerance, assert_agrees, scenes};
+    use schema::{Named, PeerKind};
+    use tracer::testing::{Reference, Tolerance, scenes};
 
-    #[test]
-    fn bvh2_agrees_with_brute_force() {
-        for (label, spheres, rays) in scenes() {
+    /// Every test scene, built at three presets: leaves call our own `Sphere::intersect`, so hit distances must
+    /// be bit-identical to brute force's.
+    fn agrees_with_brute_force<A: Accelerator>(name: &str, build: impl Fn(&[Sphere], ObvhsQuality) -> A) {
+        for scene in scenes() {
+            let reference = Reference::new(&scene.spheres, &scene.rays);
             for quality in [ObvhsQuality::Fastest, ObvhsQuality::Medium, ObvhsQuality::VerySlow] {
-                let accel = ObvhsBvh2::build(&spheres, quality);
-                assert_agrees(&format!("obvhs-bvh2 {} {label}", quality.name()), &accel, &spheres, &rays, Tolerance::Exact);
+                let accel = build(&scene.spheres, quality);
+                reference.assert_agrees(&format!("{name} {} {}", quality.name(), scene.label), &accel, Tolerance::Exact);
             }
         }
     }
 
     #[test]
+    fn bvh2_agrees_with_brute_force() {
+        agrees_with_brute_force(PeerKind::ObvhsBvh2.name(), ObvhsBvh2::build);
+    }
+
+    #[test]
     fn cwbvh_agrees_with_brute_force() {
-        for (label, spheres, rays) in scenes() {
-            for quality in [ObvhsQuality::Fastest, ObvhsQuality::Medium, ObvhsQuality::VerySlow] {
-                let accel = ObvhsCwbvh::build(&spheres, quality);
-                assert_agrees(&format!("obvhs-cwbvh {} {label}", quality.name()), &accel, &spheres, &rays, Tolerance::Exact);
-            }
-        }
+        agrees_with_brute_force(PeerKind::ObvhsCwbvh.name(), ObvhsCwbvh::build);
     }
 
     #[test]
@@ -308,7 +268,7 @@ mod tests {
 
     #[test]
     fn quality_names_are_the_serde_names() {
-        for q in ObvhsQuality::ALL {
+        for &q in ObvhsQuality::ALL {
             let toml = toml::to_string(&std::collections::BTreeMap::from([("quality", q)])).unwrap();
             assert_eq!(toml.trim(), format!("quality = \"{}\"", q.name()));
         }

@@ -1,10 +1,8 @@
 //! A rough time estimate for `harness validate`: a cost model with per-ray constants from this project's
 //! benchmarks on a 2-core dev machine (within about 2× elsewhere).
 
+use schema::{Accel, Settings, Workload};
 use tracer::accel::{AccelKind, Traversal};
-
-use super::Settings;
-use crate::config::axes::Workload;
 
 /// Seconds one run of `s` is expected to take on a machine with `cores` cores.
 pub fn estimate_seconds(s: &Settings, cores: usize) -> f64 {
@@ -14,14 +12,14 @@ pub fn estimate_seconds(s: &Settings, cores: usize) -> f64 {
         Workload::Render => pixels * 2.6,
     };
     let n = s.objects.max(1) as f64;
-    let per_ray = match (s.accel.kind, s.accel.bvh.traversal) {
-        _ if s.peer.is_some() => 25e-9 * n.log2().max(1.0),
-        (AccelKind::List, _) => 2.5e-9 * n,
-        (_, Traversal::FrontToBack) => 25e-9 * n.log2().max(1.0),
-        (_, Traversal::Fixed) => 25e-9 * n.log2().max(1.0) * (1.0 + n.log10().max(0.0)),
+    let per_ray = match (s.accel, s.traversal) {
+        (Accel::Peer(_), _) => 25e-9 * n.log2().max(1.0),
+        (Accel::Ours(AccelKind::List), _) => 2.5e-9 * n,
+        (_, Some(Traversal::FrontToBack)) => 25e-9 * n.log2().max(1.0),
+        (_, _) => 25e-9 * n.log2().max(1.0) * (1.0 + n.log10().max(0.0)),
     };
-    let parallel = 0.9 * s.strategy.threads.min(cores).max(1) as f64;
-    let build = if s.accel.kind == AccelKind::List && s.peer.is_none() { 0.0 } else { 2e-7 * n * n.log2().max(1.0) / 10.0 };
+    let parallel = 0.9 * s.strategy().threads.min(cores).max(1) as f64;
+    let build = if s.accel == Accel::Ours(AccelKind::List) { 0.0 } else { 2e-7 * n * n.log2().max(1.0) / 10.0 };
     let encode = if s.workload == Workload::Render { pixels * 3e-8 } else { 0.0 };
     rays * per_ray / parallel + build + encode + 1e-7 * n
 }

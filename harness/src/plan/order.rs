@@ -16,7 +16,9 @@ pub fn runs(exp: &Experiment, configs: usize) -> Vec<PlannedRun> {
                 warmups.chain((0..reps).map(move |r| PlannedRun { config, repetition: Some(r) }))
             })
             .collect(),
-        RunOrder::Interleaved => (0..warm).flat_map(|_| round(None)).chain((0..reps).flat_map(|r| round(Some(r)))).collect(),
+        RunOrder::Interleaved => {
+            (0..warm).flat_map(|_| round(None)).chain((0..reps).flat_map(|r| round(Some(r)))).collect()
+        }
         RunOrder::Shuffled => {
             let mut timed: Vec<PlannedRun> = (0..reps).flat_map(|r| round(Some(r))).collect();
             let mut rng = SplitMix64::new(exp.order_seed);

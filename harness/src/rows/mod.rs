@@ -1,25 +1,17 @@
-//! Recorded rows: one per timed repetition, appended to `runs.csv` and flushed as each run finishes.
+//! Recorded rows: one [`schema::Row`] per timed repetition, appended to `runs.csv` and flushed as each run
+//! finishes.
 //!
-//! The column contract is `report/ROWS.md`. A sweep killed at any point leaves complete lines plus at most
-//! one partial last line; [`RowLog::resume`] cuts that line off and reports which runs are done.
+//! The column contract is `report/ROWS.md` (generated from the schema). A sweep killed at any point leaves
+//! complete lines plus at most one partial last line; [`RowLog::resume`] cuts that line off and reports
+//! which runs are done.
 
 use std::collections::HashSet;
 use std::fs::{File, OpenOptions};
 use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::Path;
 
-pub use report::csv::{field as csv_field, split_line as split_csv_line};
-
-/// Column names, in order (see `report/ROWS.md`).
-pub const COLUMNS: &[&str] = &[
-    "experiment", "config_id", "series", "repetition", "scene", "objects", "seed", "accel", "split", "leaf_size",
-    "sah_bins", "traversal", "strategy", "threads", "width", "height", "max_depth", "workload", "obvhs_build",
-    "embree_build", "embree_isa", "scene_s", "build_s",
-    "trace_s", "encode_s", "total_s", "rays", "mrays_per_s", "nodes_per_ray", "box_tests_per_ray",
-    "prim_tests_per_ray", "tree_nodes", "tree_leaves", "tree_depth", "tree_bytes", "sah_cost", "image_hash",
-    "scene_fingerprint", "git_commit", "git_dirty", "rustc", "cpu_model", "logical_cores", "load_avg_1m", "timestamp",
-    "harness_version", "validation", "validated_against", "mismatches", "peer_info",
-];
+use schema::Row;
+use schema::row::{csv_line, header, read_rows};
 
 /// The append-only row log of one run folder.
 pub struct RowLog {
@@ -30,7 +22,7 @@ impl RowLog {
     /// Starts a new log at `path` (replacing any old one) with the header line.
     pub fn create(path: &Path) -> io::Result<Self> {
         let mut file = File::create(path)?;
-        file.write_all(format!("{}\n", COLUMNS.join(",")).as_bytes())?;
+        file.write_all(format!("{}\n", header()).as_bytes())?;
         file.flush()?;
         Ok(Self { file })
     }
@@ -46,24 +38,18 @@ impl RowLog {
             file.set_len(complete as u64)?;
         }
         file.seek(SeekFrom::End(0))?;
-        let mut lines = text[..complete].lines();
-        let header = lines.next().unwrap_or_default();
-        if header != COLUMNS.join(",") {
+        if text.lines().next().unwrap_or_default() != header() {
             return Err(io::Error::new(io::ErrorKind::InvalidData, "its header is not this harness's column list"));
         }
-        let (id, rep) = (1, 3);
-        let done = lines
-            .map(split_csv_line)
-            .filter_map(|f| Some((f.get(id)?.clone(), f.get(rep)?.parse().ok()?)))
-            .collect();
+        let rows =
+            read_rows(&text[..complete]).map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))?;
+        let done = rows.into_iter().map(|r| (r.config_id, r.repetition)).collect();
         Ok((Self { file }, done))
     }
 
-    /// Appends one row (values in [`COLUMNS`] order) as a single write, then flushes.
-    pub fn append(&mut self, values: &[String]) -> io::Result<()> {
-        debug_assert_eq!(values.len(), COLUMNS.len());
-        let line: Vec<String> = values.iter().map(|v| csv_field(v)).collect();
-        self.file.write_all(format!("{}\n", line.join(",")).as_bytes())?;
+    /// Appends one row as a single write, then flushes.
+    pub fn append(&mut self, row: &Row) -> io::Result<()> {
+        self.file.write_all(csv_line(row)?.as_bytes())?;
         self.file.flush()
     }
 }
@@ -73,21 +59,14 @@ mod tests {
     use super::*;
 
     #[test]
-    fn csv_round_trips_quotes_and_commas() {
-        let fields = ["plain", "a,b", "say \"hi\"", "serial·list", ""];
-        let line: Vec<String> = fields.iter().map(|f| csv_field(f)).collect();
-        assert_eq!(split_csv_line(&line.join(",")), fields);
-    }
-
-    #[test]
     fn resume_drops_a_partial_line_and_lists_done_runs() {
         let dir = std::env::temp_dir().join(format!("bvhlab-rows-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("runs.csv");
         let mut log = RowLog::create(&path).unwrap();
-        let mut row: Vec<String> = COLUMNS.iter().map(|_| "0".to_string()).collect();
-        row[1] = "abc".into();
-        row[3] = "2".into();
+        let settings = schema::Settings { threads: schema::Threads::Count(1), ..Default::default() }.normalized();
+        let mut row =
+            Row { config_id: "abc".into(), repetition: 2, series: "say \"hi\", twice".into(), ..Row::of(&settings) };
         log.append(&row).unwrap();
         drop(log);
         let mut f = OpenOptions::new().append(true).open(&path).unwrap();
@@ -95,11 +74,12 @@ mod tests {
         drop(f);
         let (mut log, done) = RowLog::resume(&path).unwrap();
         assert_eq!(done, HashSet::from([("abc".to_string(), 2)]));
-        row[1] = "def".into();
+        row.config_id = "def".into();
         log.append(&row).unwrap();
         let text = std::fs::read_to_string(&path).unwrap();
         assert_eq!(text.lines().count(), 3);
-        assert!(text.lines().all(|l| split_csv_line(l).len() == COLUMNS.len()));
+        let rows = read_rows(&text).unwrap();
+        assert_eq!(rows[1], row, "quotes and commas round-trip");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -7,7 +7,7 @@ use tracer::render::PrimaryHits;
 
 use crate::error::Error;
 use crate::peers::{EmbreeConfig, EmbreeDevice, EmbreeSpheres, ObvhsBvh2, ObvhsCwbvh, PeerKind};
-use crate::plan::Settings;
+use schema::Settings;
 
 /// Embree queried 16 rays at a time (`rtcIntersect16`) for closest hits; occlusion stays `rtcOccluded1`.
 pub struct EmbreePackets(pub EmbreeSpheres);
@@ -48,24 +48,32 @@ pub enum Backend {
 impl Backend {
     /// Builds the backend `settings` names; peers build with `settings.strategy.threads` threads.
     pub fn build(settings: &Settings, spheres: &[Sphere]) -> Result<Backend, Error> {
-        let Some(peer) = settings.peer else {
-            return Ok(Backend::Ours(BuiltAccel::build(spheres, &settings.accel)));
+        let Some(peer) = settings.peer() else {
+            return Ok(Backend::Ours(BuiltAccel::build(spheres, &settings.accel_params())));
         };
-        let threads = settings.strategy.threads.max(1);
-        Ok(match peer.kind {
+        let threads = settings.strategy().threads.max(1);
+        Ok(match peer {
             PeerKind::ObvhsBvh2 | PeerKind::ObvhsCwbvh => {
                 // obvhs builds with rayon: inside this pool it uses exactly the configured threads.
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("building a rayon pool");
-                pool.install(|| match peer.kind {
-                    PeerKind::ObvhsBvh2 => Backend::ObvhsBvh2(ObvhsBvh2::build(spheres, peer.obvhs)),
-                    _ => Backend::ObvhsCwbvh(ObvhsCwbvh::build(spheres, peer.obvhs)),
+                let preset = settings.obvhs_build.unwrap_or_default();
+                pool.install(|| match peer {
+                    PeerKind::ObvhsBvh2 => Backend::ObvhsBvh2(ObvhsBvh2::build(spheres, preset)),
+                    _ => Backend::ObvhsCwbvh(ObvhsCwbvh::build(spheres, preset)),
                 })
             }
             PeerKind::Embree | PeerKind::EmbreePackets => {
-                let config = EmbreeConfig { threads: Some(threads), isa: peer.isa.map(str::to_string), quality: peer.embree };
+                let quality = settings.embree_build.unwrap_or_default();
+                let isa = settings.embree_isa.and_then(|i| i.pinned()).map(str::to_string);
+                let config = EmbreeConfig { threads: Some(threads), isa, quality };
                 let device = EmbreeDevice::new(&config).map_err(|e| Error::Run(format!("embree: {e}")))?;
-                let scene = EmbreeSpheres::build(&device, spheres, peer.embree).map_err(|e| Error::Run(format!("embree: {e}")))?;
-                if peer.kind == PeerKind::Embree { Backend::Embree(scene) } else { Backend::EmbreePackets(EmbreePackets(scene)) }
+                let scene =
+                    EmbreeSpheres::build(&device, spheres, quality).map_err(|e| Error::Run(format!("embree: {e}")))?;
+                if peer == PeerKind::Embree {
+                    Backend::Embree(scene)
+                } else {
+                    Backend::EmbreePackets(EmbreePackets(scene))
+                }
             }
         })
     }

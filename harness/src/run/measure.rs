@@ -3,6 +3,8 @@
 
 use std::time::Instant;
 
+use schema::{Settings, Workload};
+use serde::{Deserialize, Serialize};
 use tracer::accel::{AccelVisitor, Accelerator, TreeStats};
 use tracer::counters::{Counters, NoCounters, WorkCounters};
 use tracer::rays::{RayAnswers, RaySet, trace};
@@ -10,12 +12,10 @@ use tracer::render::{RenderSettings, render};
 use tracer::scene::Scene;
 
 use super::backend::Backend;
-use crate::config::axes::Workload;
 use crate::error::Error;
-use crate::plan::{SceneSource, Settings};
 
-/// Wall times of one run, and what it produced.
-#[derive(Clone, Debug, PartialEq)]
+/// Wall times of one run, and what it produced (a worker process answers with it as JSON).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Timing {
     pub scene_s: f64,
     pub build_s: f64,
@@ -34,40 +34,14 @@ impl Timing {
     pub fn total_s(&self) -> f64 {
         self.scene_s + self.build_s + self.trace_s + self.encode_s
     }
-
-    /// One line for a worker process to hand its result to the sweep (tab-separated).
-    pub fn to_line(&self) -> String {
-        let s = &self.stats;
-        format!(
-            "{}\t{}\t{}\t{}\t{:016x}\t{:016x}\t{}\t{}\t{}\t{}\t{}\t{}",
-            self.scene_s, self.build_s, self.trace_s, self.encode_s, self.output_hash, self.scene_fingerprint,
-            s.nodes, s.leaves, s.depth, s.bytes, s.sah_cost, self.peer_info
-        )
-    }
-
-    /// Parses [`Timing::to_line`].
-    pub fn from_line(line: &str) -> Option<Timing> {
-        let f: Vec<&str> = line.trim_end_matches('\n').split('\t').collect();
-        let hex = |s: &str| u64::from_str_radix(s, 16).ok();
-        (f.len() == 12).then_some(())?;
-        Some(Timing {
-            scene_s: f[0].parse().ok()?,
-            build_s: f[1].parse().ok()?,
-            trace_s: f[2].parse().ok()?,
-            encode_s: f[3].parse().ok()?,
-            output_hash: hex(f[4])?,
-            scene_fingerprint: hex(f[5])?,
-            stats: TreeStats { nodes: f[6].parse().ok()?, leaves: f[7].parse().ok()?, depth: f[8].parse().ok()?, bytes: f[9].parse().ok()?, sah_cost: f[10].parse().ok()? },
-            peer_info: f[11].to_string(),
-        })
-    }
 }
 
-/// The scene of `s` at its image size.
-pub fn make_scene(s: &Settings) -> Scene {
-    let scene = match &s.scene {
-        SceneSource::Generated(kind) => kind.generate(s.objects, s.seed),
-        SceneSource::File(scene) => Scene::clone(scene),
+/// The scene of `s` at its image size; `file` holds the spheres of a sphere-file scene.
+pub fn make_scene(s: &Settings, file: Option<&Scene>) -> Scene {
+    let scene = match (s.scene, file) {
+        (schema::SceneName::Generated(kind), _) => kind.generate(s.objects as usize, s.seed),
+        (schema::SceneName::SphereFile, Some(scene)) => Scene::clone(scene),
+        (schema::SceneName::SphereFile, None) => panic!("a sphere-file scene needs its file (read when planning)"),
     };
     Scene { camera: scene.camera.with_resolution(s.width, s.height), ..scene }
 }
@@ -87,7 +61,8 @@ impl<C: Counters> AccelVisitor for Work<'_, C> {
         let s = self.settings;
         match s.workload {
             Workload::Render => {
-                let (image, c) = render::<_, C>(self.scene, accel, &RenderSettings { max_depth: s.max_depth }, &s.strategy);
+                let (image, c) =
+                    render::<_, C>(self.scene, accel, &RenderSettings { max_depth: s.max_depth }, &s.strategy());
                 if let Some(encode_s) = self.encode_s {
                     let t = Instant::now();
                     let mut png = Vec::new();
@@ -99,7 +74,7 @@ impl<C: Counters> AccelVisitor for Work<'_, C> {
             }
             Workload::Rays(_) => {
                 let set = self.rays.expect("ray-set workloads come with their rays");
-                let (answers, c) = trace::<_, C>(accel, set, &s.strategy);
+                let (answers, c) = trace::<_, C>(accel, set, &s.strategy());
                 (answers.hash(), c, Some(answers))
             }
         }
@@ -107,17 +82,22 @@ impl<C: Counters> AccelVisitor for Work<'_, C> {
 }
 
 /// Runs `settings` once with every phase timed (no counters). `rays` is the workload's ray set.
-pub fn timed(settings: &Settings, rays: Option<&RaySet>) -> Result<Timing, Error> {
+pub fn timed(settings: &Settings, file: Option<&Scene>, rays: Option<&RaySet>) -> Result<Timing, Error> {
     let t = Instant::now();
-    let scene = make_scene(settings);
+    let scene = make_scene(settings, file);
     let scene_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let backend = Backend::build(settings, &scene.spheres)?;
     let build_s = t.elapsed().as_secs_f64();
     let mut encode_s = 0.0;
     let t = Instant::now();
-    let (output_hash, _, _) =
-        backend.visit(Work::<NoCounters> { scene: &scene, settings, rays, encode_s: Some(&mut encode_s), _c: Default::default() });
+    let (output_hash, _, _) = backend.visit(Work::<NoCounters> {
+        scene: &scene,
+        settings,
+        rays,
+        encode_s: Some(&mut encode_s),
+        _c: Default::default(),
+    });
     let trace_s = t.elapsed().as_secs_f64() - encode_s;
     Ok(Timing {
         scene_s,
@@ -133,10 +113,16 @@ pub fn timed(settings: &Settings, rays: Option<&RaySet>) -> Result<Timing, Error
 
 /// Runs `settings` once with work counters (untimed): counters, output hash, and the ray-set answers of
 /// `answer_rays` (the workload's own set, or the primary set for the render workload) for validation.
-pub fn counted(settings: &Settings, rays: Option<&RaySet>, answer_rays: &RaySet) -> Result<(WorkCounters, u64, RayAnswers), Error> {
-    let scene = make_scene(settings);
+pub fn counted(
+    settings: &Settings,
+    file: Option<&Scene>,
+    rays: Option<&RaySet>,
+    answer_rays: &RaySet,
+) -> Result<(WorkCounters, u64, RayAnswers), Error> {
+    let scene = make_scene(settings, file);
     let backend = Backend::build(settings, &scene.spheres)?;
-    let (hash, c, answers) = backend.visit(Work::<WorkCounters> { scene: &scene, settings, rays, encode_s: None, _c: Default::default() });
+    let (hash, c, answers) =
+        backend.visit(Work::<WorkCounters> { scene: &scene, settings, rays, encode_s: None, _c: Default::default() });
     let answers = match (answers, rays) {
         (Some(a), Some(r)) if std::ptr::eq(r, answer_rays) => a,
         _ => {
@@ -144,7 +130,7 @@ pub fn counted(settings: &Settings, rays: Option<&RaySet>, answer_rays: &RaySet)
             impl AccelVisitor for Answers<'_> {
                 type Output = RayAnswers;
                 fn visit<A: Accelerator>(self, a: &A) -> RayAnswers {
-                    trace::<_, NoCounters>(a, self.0, &self.1.strategy).0
+                    trace::<_, NoCounters>(a, self.0, &self.1.strategy()).0
                 }
             }
             backend.visit(Answers(answer_rays, settings))
@@ -158,7 +144,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn timing_lines_round_trip() {
+    fn timings_round_trip_through_json() {
         let t = Timing {
             scene_s: 0.125,
             build_s: 1e-5,
@@ -169,7 +155,8 @@ mod tests {
             stats: TreeStats { nodes: 7, leaves: 4, depth: 2, bytes: 1024, sah_cost: 3.5 },
             peer_info: "embree 4.4.0 native width 8 (avx/avx2), threads=1".into(),
         };
-        assert_eq!(Timing::from_line(&t.to_line()), Some(t));
-        assert_eq!(Timing::from_line("1\t2"), None);
+        let json = serde_json::to_string(&t).unwrap();
+        assert_eq!(serde_json::from_str::<Timing>(&json).unwrap(), t);
+        assert!(serde_json::from_str::<Timing>("{\"scene_s\": 1}").is_err());
     }
 }

@@ -5,22 +5,24 @@ mod backend;
 pub mod measure;
 pub mod provenance;
 pub mod validate;
+pub mod worker;
 
 use std::collections::{HashMap, HashSet};
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
+use schema::{PeerKind, Row, Settings, Workload};
 use tracer::counters::WorkCounters;
 use tracer::rays::RaySet;
 
 use crate::config::Experiment;
 use crate::error::Error;
 use crate::output::Progress;
-use crate::plan::{Configuration, Plan, Settings};
+use crate::plan::{Configuration, Plan};
 use crate::rows::RowLog;
 use measure::Timing;
 use provenance::{Provenance, load_average_1m, timestamp_now};
 use validate::RayBank;
+use worker::WorkerRequest;
 
 /// File names inside a run folder.
 pub const RUNS_CSV: &str = "runs.csv";
@@ -50,7 +52,7 @@ fn open_log(exp: &Experiment, dir: &Path, resume: bool) -> Result<(RowLog, HashS
 
 fn describe(c: &Configuration) -> String {
     let s = &c.settings;
-    format!("{} {} objects={} seed={} {}", c.series, s.workload.name(), s.objects, s.seed, s.strategy)
+    format!("{} {} objects={} seed={} {}", c.series, schema::Named::name(s.workload), s.objects, s.seed, s.strategy())
 }
 
 /// What validation found for one configuration.
@@ -63,105 +65,86 @@ struct Checked {
     rays: usize,
 }
 
-/// How to start a worker process for runs that must not share this process (Embree: TBB's thread limit
-/// is process-wide).
-#[derive(Clone, Debug)]
-pub struct WorkerCall {
-    pub config: PathBuf,
-    pub quick: bool,
-}
-
-impl WorkerCall {
-    fn time(&self, c: &Configuration) -> Result<Timing, Error> {
-        let exe = std::env::current_exe().map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
-        let mut cmd = Command::new(exe);
-        cmd.arg("worker").arg(&self.config).args(["--config-id", &c.id]);
-        if self.quick {
-            cmd.arg("--quick");
-        }
-        let out = cmd.output().map_err(|e| Error::Run(format!("cannot start a worker process: {e}")))?;
-        let text = String::from_utf8_lossy(&out.stdout);
-        match (out.status.success(), text.lines().last().and_then(Timing::from_line)) {
-            (true, Some(t)) => Ok(t),
-            _ => Err(Error::Run(format!(
-                "worker for {} failed: {}",
-                describe(c),
-                String::from_utf8_lossy(&out.stderr).trim().lines().last().unwrap_or("no output")
-            ))),
-        }
-    }
-}
-
-/// The ray set a settings' workload traces (`None` for the render workload).
-fn workload_rays(s: &Settings, bank: &mut RayBank) -> Option<std::sync::Arc<RaySet>> {
+/// The ray set a configuration's workload traces (`None` for the render workload).
+fn workload_rays(plan: &Plan, s: &Settings, bank: &mut RayBank) -> Option<std::sync::Arc<RaySet>> {
     match s.workload {
-        crate::config::axes::Workload::Rays(k) => Some(bank.get(s, k).0),
-        crate::config::axes::Workload::Render => None,
+        Workload::Rays(k) => Some(bank.get(s, plan.scene_file(), k).0),
+        Workload::Render => None,
     }
 }
 
-/// Runs one configuration of the plan in this process and returns its timing: the worker side of
-/// [`WorkerCall`].
-pub fn work(plan: &Plan, config_id: &str) -> Result<Timing, Error> {
-    let c = plan.configurations.iter().find(|c| c.id == config_id).ok_or_else(|| Error::Input(format!("no configuration {config_id} in this plan")))?;
-    let rays = match c.settings.workload {
-        crate::config::axes::Workload::Rays(k) => Some(validate::generate(k, &measure::make_scene(&c.settings), c.settings.seed)),
-        crate::config::axes::Workload::Render => None,
-    };
-    measure::timed(&c.settings, rays.as_ref())
+/// The worker request of a configuration.
+pub fn worker_request(plan: &Plan, c: &Configuration) -> WorkerRequest {
+    WorkerRequest { settings: c.settings.clone(), sphere_file: plan.sphere_file.as_ref().map(|f| f.path.clone()) }
 }
 
-fn check(c: &Configuration, bank: &mut RayBank) -> Result<Checked, Error> {
-    let rays = workload_rays(&c.settings, bank);
-    let (set, reference, name) = bank.get(&c.settings, RayBank::validation_kind(c.settings.workload));
-    let (counters, output_hash, answers) = measure::counted(&c.settings, rays.as_deref(), &set)?;
-    Ok(Checked { counters, output_hash, reference: name, mismatches: validate::mismatches(&set, &reference, &answers), rays: set.rays.len() })
+fn check(plan: &Plan, c: &Configuration, bank: &mut RayBank) -> Result<Checked, Error> {
+    let rays = workload_rays(plan, &c.settings, bank);
+    let (set, reference, name) = bank.get(&c.settings, plan.scene_file(), c.settings.workload.validation_kind());
+    let (counters, output_hash, answers) = measure::counted(&c.settings, plan.scene_file(), rays.as_deref(), &set)?;
+    Ok(Checked {
+        counters,
+        output_hash,
+        reference: name,
+        mismatches: validate::mismatches(&set, &reference, &answers),
+        rays: set.rays.len(),
+    })
 }
 
-fn row(exp: &Experiment, c: &Configuration, rep: u32, t: &Timing, v: &Checked, p: &Provenance, load: f64, ts: String) -> Vec<String> {
+/// The row of one timed repetition (or of a configuration that failed validation, with NaN timings).
+fn row(
+    exp: &Experiment,
+    c: &Configuration,
+    rep: u32,
+    t: &Timing,
+    v: &Checked,
+    p: &Provenance,
+    load: f64,
+    timestamp: String,
+) -> Row {
     let w = &v.counters;
     let (nodes, boxes, prims) = w.per_ray();
-    let trace_s = t.trace_s.max(1e-12);
-    let mut row = vec![exp.name.clone(), c.id.clone(), c.series.clone(), rep.to_string()];
-    row.extend(c.settings.columns());
-    row.extend([
-        format!("{:.9}", t.scene_s),
-        format!("{:.9}", t.build_s),
-        format!("{:.9}", t.trace_s),
-        format!("{:.9}", t.encode_s),
-        format!("{:.9}", t.total_s()),
-        w.rays.to_string(),
-        format!("{:.6}", w.rays as f64 / trace_s / 1e6),
-        format!("{nodes:.6}"),
-        format!("{boxes:.6}"),
-        format!("{prims:.6}"),
-        t.stats.nodes.to_string(),
-        t.stats.leaves.to_string(),
-        t.stats.depth.to_string(),
-        t.stats.bytes.to_string(),
-        format!("{:.6}", t.stats.sah_cost),
-        format!("{:016x}", t.output_hash),
-        format!("{:016x}", t.scene_fingerprint),
-        p.git_commit.clone(),
-        p.git_dirty.to_string(),
-        p.rustc.clone(),
-        p.cpu_model.clone(),
-        p.logical_cores.to_string(),
-        format!("{load:.2}"),
-        ts,
-        p.harness_version.clone(),
-        if v.mismatches == 0 { "exact".into() } else { "FAILED".into() },
-        v.reference.to_string(),
-        v.mismatches.to_string(),
-        t.peer_info.clone(),
-    ]);
-    row
+    let mut row = Row::of(&c.settings);
+    row.experiment = exp.name.clone();
+    row.config_id = c.id.clone();
+    row.series = c.series.clone();
+    row.repetition = rep;
+    row.scene_s = t.scene_s;
+    row.build_s = t.build_s;
+    row.trace_s = t.trace_s;
+    row.encode_s = t.encode_s;
+    row.total_s = t.total_s();
+    row.rays = w.rays;
+    row.mrays_per_s = w.rays as f64 / t.trace_s.max(1e-12) / 1e6;
+    row.nodes_per_ray = nodes;
+    row.box_tests_per_ray = boxes;
+    row.prim_tests_per_ray = prims;
+    row.tree_nodes = t.stats.nodes as u64;
+    row.tree_leaves = t.stats.leaves as u64;
+    row.tree_depth = t.stats.depth as u64;
+    row.tree_bytes = t.stats.bytes as u64;
+    row.sah_cost = t.stats.sah_cost;
+    row.image_hash = format!("{:016x}", t.output_hash);
+    row.scene_fingerprint = format!("{:016x}", t.scene_fingerprint);
+    row.git_commit = p.git_commit.clone();
+    row.git_dirty = p.git_dirty;
+    row.rustc = p.rustc.clone();
+    row.cpu_model = p.cpu_model.clone();
+    row.logical_cores = p.logical_cores as u32;
+    row.load_avg_1m = load;
+    row.timestamp = timestamp;
+    row.harness_version = p.harness_version.clone();
+    row.validation = if v.mismatches == 0 { "exact".into() } else { "FAILED".into() };
+    row.validated_against = v.reference.to_string();
+    row.mismatches = v.mismatches as u64;
+    row.peer_info = t.peer_info.clone();
+    row.rounded()
 }
 
 /// Runs every planned run not yet recorded in `dir`, appending rows as they finish. Each configuration is
 /// validated (and counted) once before its first timed run; one that disagrees with the reference is
 /// recorded once with `validation = FAILED` and no timings, and never timed.
-pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool, worker: &WorkerCall) -> Result<(), Error> {
+pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<(), Error> {
     let provenance = Provenance::collect();
     let (mut log, done) = open_log(exp, dir, resume)?;
     let is_done = |config: usize, rep: u32| done.contains(&(plan.configurations[config].id.clone(), rep));
@@ -188,15 +171,27 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool, worker: &W
             continue;
         }
         if !checked.contains_key(&run.config) {
-            let v = check(c, &mut bank)?;
+            let v = check(plan, c, &mut bank)?;
             if v.mismatches > 0 {
                 eprintln!(
                     "VALIDATION FAILED: {}: {} of {} rays disagree with {}; this configuration is not timed",
-                    describe(c), v.mismatches, v.rays, v.reference
+                    describe(c),
+                    v.mismatches,
+                    v.rays,
+                    v.reference
                 );
-                let nan = Timing { scene_s: f64::NAN, build_s: f64::NAN, trace_s: f64::NAN, encode_s: f64::NAN, output_hash: v.output_hash, scene_fingerprint: 0, stats: Default::default(), peer_info: "-".into() };
-                let values = row(exp, c, 0, &nan, &v, &provenance, load_average_1m(), timestamp_now());
-                log.append(&values).map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))?;
+                let nan = Timing {
+                    scene_s: f64::NAN,
+                    build_s: f64::NAN,
+                    trace_s: f64::NAN,
+                    encode_s: f64::NAN,
+                    output_hash: v.output_hash,
+                    scene_fingerprint: 0,
+                    stats: Default::default(),
+                    peer_info: "-".into(),
+                };
+                log.append(&row(exp, c, 0, &nan, &v, &provenance, load_average_1m(), timestamp_now()))
+                    .map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))?;
                 failed.insert(run.config);
                 progress.finished(&format!("{} FAILED validation", describe(c)));
                 continue;
@@ -205,11 +200,13 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool, worker: &W
         }
         let load = load_average_1m();
         let ts = timestamp_now();
-        let timing = if c.settings.peer.is_some_and(|p| p.kind.needs_embree()) {
-            worker.time(c)?
+        let timing = if c.settings.peer().is_some_and(PeerKind::needs_embree) {
+            let exe =
+                std::env::current_exe().map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
+            worker::time(&exe, None, &worker_request(plan, c))?
         } else {
-            let rays = workload_rays(&c.settings, &mut bank);
-            measure::timed(&c.settings, rays.as_deref())?
+            let rays = workload_rays(plan, &c.settings, &mut bank);
+            measure::timed(&c.settings, plan.scene_file(), rays.as_deref())?
         };
         let Some(rep) = run.repetition else {
             progress.finished(&format!("{} warm-up", describe(c)));
@@ -224,8 +221,8 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool, worker: &W
                 timing.output_hash
             )));
         }
-        let values = row(exp, c, rep, &timing, v, &provenance, load, ts);
-        log.append(&values).map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))?;
+        log.append(&row(exp, c, rep, &timing, v, &provenance, load, ts))
+            .map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))?;
         progress.finished(&format!("{} rep {rep}: {:.3} s", describe(c), timing.total_s()));
     }
     progress.finish();

@@ -10,15 +10,15 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use tracer::accel::{BvhParams, FlatBvh, List, Split, Traversal};
+use schema::{SceneName, Settings};
+use tracer::accel::{AccelKind, BvhParams, FlatBvh, List, Split, Traversal};
 use tracer::counters::NoCounters;
 use tracer::executor::Strategy;
 use tracer::rays::{RayAnswers, RayKind, RaySet, trace};
 use tracer::render::PrimaryHits;
 
 use super::measure::make_scene;
-use crate::config::axes::Workload;
-use crate::plan::{SceneSource, Settings};
+use tracer::scene::Scene;
 
 /// Largest scene validated against brute force.
 pub const BRUTE_FORCE_MAX: usize = 10_000;
@@ -60,7 +60,7 @@ pub fn mismatches(set: &RaySet, reference: &RayAnswers, got: &RayAnswers) -> usi
 }
 
 /// A scene's identity for caching: scene source, objects, seed and image size.
-type SceneKey = (String, usize, u64, u32, u32);
+type SceneKey = (String, u64, u64, u32, u32);
 
 /// Ray sets and reference answers, generated once per scene and ray kind.
 #[derive(Default)]
@@ -69,38 +69,35 @@ pub struct RayBank {
 }
 
 impl RayBank {
-    fn key(s: &Settings) -> SceneKey {
-        let source = match &s.scene {
-            SceneSource::Generated(k) => k.name().to_string(),
-            SceneSource::File(scene) => format!("file:{:016x}", scene.fingerprint()),
+    fn key(s: &Settings, file: Option<&Scene>) -> SceneKey {
+        let source = match (s.scene, file) {
+            (SceneName::SphereFile, Some(scene)) => format!("file:{:016x}", scene.fingerprint()),
+            (scene, _) => schema::Named::name(scene).to_string(),
         };
         (source, s.objects, s.seed, s.width, s.height)
     }
 
-    /// The ray kind a workload is validated with (the render workload: its primary rays).
-    pub fn validation_kind(workload: Workload) -> RayKind {
-        match workload {
-            Workload::Rays(k) => k,
-            Workload::Render => RayKind::Primary,
-        }
-    }
-
     /// The ray set of kind `kind` for the scene of `s`, its reference answers and the reference's name.
-    pub fn get(&mut self, s: &Settings, kind: RayKind) -> (Arc<RaySet>, Arc<RayAnswers>, &'static str) {
+    pub fn get(
+        &mut self,
+        s: &Settings,
+        file: Option<&Scene>,
+        kind: RayKind,
+    ) -> (Arc<RaySet>, Arc<RayAnswers>, &'static str) {
         self.sets
-            .entry((Self::key(s), kind))
+            .entry((Self::key(s, file), kind))
             .or_insert_with(|| {
-                let scene = make_scene(s);
+                let scene = make_scene(s, file);
                 let (set, answers, name) = if scene.spheres.len() <= BRUTE_FORCE_MAX {
                     let list = List::build(&scene.spheres);
                     let set = generate(kind, &scene, s.seed);
                     let answers = trace::<_, NoCounters>(&list, &set, &Strategy::SERIAL).0;
-                    (set, answers, "list")
+                    (set, answers, AccelKind::List.name())
                 } else {
                     let tree = FlatBvh::build(&scene.spheres, &reference_params());
                     let set = generate(kind, &scene, s.seed);
                     let answers = trace::<_, NoCounters>(&tree, &set, &Strategy::SERIAL).0;
-                    (set, answers, "flat-bvh")
+                    (set, answers, AccelKind::FlatBvh.name())
                 };
                 (Arc::new(set), Arc::new(answers), name)
             })
@@ -115,13 +112,12 @@ pub fn generate(kind: RayKind, scene: &tracer::scene::Scene, seed: u64) -> RaySe
     RaySet::generate(kind, scene, &fast, seed ^ 0xd1ff_u64)
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use tracer::Vec3;
     use tracer::accel::Hit;
     use tracer::geometry::Ray;
-    use tracer::Vec3;
 
     fn set(rays: Vec<Ray>) -> RaySet {
         RaySet { kind: RayKind::Primary, rays }
@@ -133,7 +129,11 @@ mod tests {
         let hit = |t| Hit { t, prim: 1 };
         let want = RayAnswers::Closest(vec![hit(10.0), hit(10.0), PrimaryHits::MISS, hit(10.0)]);
         let got = RayAnswers::Closest(vec![hit(10.0005), hit(10.01), hit(3.0), Hit { t: 10.0, prim: 7 }]);
-        assert_eq!(mismatches(&rays, &want, &got), 2, "1e-4 relative passes, 1e-3 fails, hit vs miss fails, ids ignored");
+        assert_eq!(
+            mismatches(&rays, &want, &got),
+            2,
+            "1e-4 relative passes, 1e-3 fails, hit vs miss fails, ids ignored"
+        );
         let flags = |v: &[bool]| RayAnswers::Occluded(v.to_vec());
         assert_eq!(mismatches(&rays, &flags(&[true, false, true, true]), &flags(&[true, true, true, false])), 2);
         assert_eq!(mismatches(&rays, &flags(&[true]), &want), usize::MAX);

@@ -4,43 +4,18 @@ use std::ffi::{CStr, CString, c_char, c_void};
 use std::fmt;
 use std::sync::{Arc, Mutex};
 
+pub use schema::EmbreeQuality;
 use serde::{Deserialize, Serialize};
 
 use super::abi::*;
 use super::library::{EmbreeLibrary, EmbreeUnavailable};
 
-/// Embree's BVH build quality (`RTC_BUILD_QUALITY_*`); sphere scenes build the same tree at every level.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum EmbreeQuality {
-    /// `RTC_BUILD_QUALITY_LOW`.
-    Low,
-    /// `RTC_BUILD_QUALITY_MEDIUM` (Embree's default).
-    #[default]
-    Medium,
-    /// `RTC_BUILD_QUALITY_HIGH`.
-    High,
-}
-
-impl EmbreeQuality {
-    /// Every level, low to high.
-    pub const ALL: [EmbreeQuality; 3] = [EmbreeQuality::Low, EmbreeQuality::Medium, EmbreeQuality::High];
-
-    /// The kebab-case name.
-    pub fn name(self) -> &'static str {
-        match self {
-            EmbreeQuality::Low => "low",
-            EmbreeQuality::Medium => "medium",
-            EmbreeQuality::High => "high",
-        }
-    }
-
-    pub(super) fn raw(self) -> u32 {
-        match self {
-            EmbreeQuality::Low => RTC_BUILD_QUALITY_LOW,
-            EmbreeQuality::Medium => RTC_BUILD_QUALITY_MEDIUM,
-            EmbreeQuality::High => RTC_BUILD_QUALITY_HIGH,
-        }
+/// Embree's `RTC_BUILD_QUALITY_*` value of a build quality.
+pub(super) fn build_quality(quality: EmbreeQuality) -> u32 {
+    match quality {
+        EmbreeQuality::Low => RTC_BUILD_QUALITY_LOW,
+        EmbreeQuality::Medium => RTC_BUILD_QUALITY_MEDIUM,
+        EmbreeQuality::High => RTC_BUILD_QUALITY_HIGH,
     }
 }
 

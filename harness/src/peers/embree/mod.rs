@@ -13,6 +13,6 @@ pub mod scene;
 #[cfg(test)]
 mod tests;
 
-pub use device::{EmbreeConfig, EmbreeDevice, EmbreeQuality};
+pub use device::{EmbreeConfig, EmbreeDevice};
 pub use library::{EmbreeLibrary, EmbreeUnavailable};
 pub use scene::EmbreeSpheres;

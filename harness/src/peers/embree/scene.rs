@@ -80,7 +80,7 @@ impl EmbreeSpheres {
         let this = Self { device: inner, scene, count: spheres.len() };
         // SAFETY: a live scene and enum values from the headers.
         unsafe {
-            (api.set_scene_build_quality)(scene, quality.raw());
+            (api.set_scene_build_quality)(scene, super::device::build_quality(quality));
             (api.set_scene_flags)(scene, RTC_SCENE_FLAG_NONE);
         }
         if !spheres.is_empty() {

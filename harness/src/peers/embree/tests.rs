@@ -2,71 +2,66 @@
 
 use std::path::PathBuf;
 
-use tracer::accel::{Accelerator, List};
+use schema::{EmbreeQuality, Named};
+use tracer::accel::Accelerator;
 use tracer::counters::NoCounters;
+use tracer::testing::{Reference, TestScene, Tolerance, scenes};
 
 use super::library::SearchInputs;
 use super::*;
-use crate::peers::testing::{Tolerance, assert_agrees, embree_device, hit_grazes, same_hit, scenes};
+use crate::peers::testing::embree_device;
+
+/// The last test scene with `n` spheres (clustered spheres, seed 2).
+fn scene_of(n: usize) -> TestScene {
+    scenes().into_iter().rfind(|s| s.spheres.len() == n).unwrap()
+}
 
 #[test]
 fn single_rays_agree_with_brute_force() {
     let Some(device) = embree_device("single_rays_agree_with_brute_force") else { return };
-    for (label, spheres, rays) in scenes() {
+    for TestScene { label, spheres, rays } in scenes() {
         let scene = EmbreeSpheres::build(&device, &spheres, EmbreeQuality::Medium).expect("build");
         assert_eq!(scene.stats().bytes, spheres.len() * 16);
-        assert_agrees(&format!("embree {label}"), &scene, &spheres, &rays, Tolerance::Relative);
+        Reference::new(&spheres, &rays).assert_agrees(&format!("embree {label}"), &scene, Tolerance::RelativeToScale);
     }
 }
 
 #[test]
 fn every_build_quality_agrees() {
     let Some(device) = embree_device("every_build_quality_agrees") else { return };
-    let (label, spheres, rays) = scenes().into_iter().rfind(|(_, s, _)| s.len() == 2000).unwrap();
-    for quality in EmbreeQuality::ALL {
+    let TestScene { label, spheres, rays } = scene_of(2000);
+    let reference = Reference::new(&spheres, &rays);
+    for &quality in EmbreeQuality::ALL {
         let scene = EmbreeSpheres::build(&device, &spheres, quality).expect("build");
-        assert_agrees(&format!("embree {} {label}", quality.name()), &scene, &spheres, &rays, Tolerance::Relative);
+        reference.assert_agrees(&format!("embree {} {label}", quality.name()), &scene, Tolerance::RelativeToScale);
     }
 }
 
 #[test]
 fn packets_agree_with_brute_force() {
     let Some(device) = embree_device("packets_agree_with_brute_force") else { return };
-    for (label, spheres, rays) in scenes() {
+    for TestScene { label, spheres, rays } in scenes() {
         let scene = EmbreeSpheres::build(&device, &spheres, EmbreeQuality::Medium).expect("build");
-        let reference = List::build(&spheres);
-        let mut bad = Vec::new();
-        let mut excused = 0;
+        let reference = Reference::new(&spheres, &rays);
         // Full packets, then the same rays in partial packets of 7 (lanes 7..16 inactive).
         for width in [16, 7] {
+            let mut comparison = reference.compare(&format!("embree packets of {width} {label}"), Tolerance::RelativeToScale);
             for (c, chunk) in rays.chunks(width).enumerate() {
                 let got = scene.intersect16(chunk);
-                for (lane, ray) in chunk.iter().enumerate() {
-                    let want = reference.intersect(ray, &mut NoCounters);
-                    if same_hit(&spheres, ray, want, got[lane], Tolerance::Relative) {
-                        continue;
-                    }
-                    if let Some((s, rel)) = hit_grazes(&spheres, ray, want, got[lane]) {
-                        eprintln!("embree packets {label}: ray {} grazes sphere {s} ({rel:.1e}): excused", c * width + lane);
-                        excused += 1;
-                    } else {
-                        bad.push(format!("width {width} ray {} {ray:?}: {:?} vs {want:?}", c * width + lane, got[lane]));
-                    }
+                for (lane, &hit) in got[..chunk.len()].iter().enumerate() {
+                    comparison.closest(c * width + lane, hit);
                 }
                 assert!(got[chunk.len()..].iter().all(Option::is_none), "{label}: inactive lanes must report no hit");
             }
+            comparison.finish();
         }
-        if excused > 0 {
-            eprintln!("embree packets {label}: {excused} hit/miss disagreement(s) on grazing rays (excused, see GRAZING)");
-        }
-        assert!(bad.is_empty(), "embree packets {label}: {} disagreements:\n{}", bad.len(), bad[..bad.len().min(8)].join("\n"));
     }
 }
 
 #[test]
 fn concurrent_queries_match_serial_ones() {
     let Some(device) = embree_device("concurrent_queries_match_serial_ones") else { return };
-    let (_, spheres, rays) = scenes().into_iter().rfind(|(_, s, _)| s.len() == 2000).unwrap();
+    let TestScene { spheres, rays, .. } = scene_of(2000);
     let scene = EmbreeSpheres::build(&device, &spheres, EmbreeQuality::Medium).expect("build");
     let serial: Vec<_> = rays.iter().map(|r| scene.intersect(r, &mut NoCounters)).collect();
     std::thread::scope(|s| {
@@ -148,7 +143,8 @@ fn camera_hits_match_exactly_without_excuses() {
 #[test]
 fn pinned_isa_sets_the_native_packet_width() {
     let Some(_) = embree_device("pinned_isa_sets_the_native_packet_width") else { return };
-    let (_, spheres, rays) = scenes().into_iter().rfind(|(_, s, _)| s.len() == 50).unwrap();
+    let TestScene { spheres, rays, .. } = scene_of(50);
+    let reference = Reference::new(&spheres, &rays);
     let on_cpu = [true, true, is_x86_feature_detected!("avx"), is_x86_feature_detected!("avx2"), is_x86_feature_detected!("avx512f")];
     for ((isa, width), on_cpu) in [("sse2", 4), ("sse4.2", 4), ("avx", 8), ("avx2", 8), ("avx512", 16)].into_iter().zip(on_cpu) {
         if !on_cpu {
@@ -157,6 +153,6 @@ fn pinned_isa_sets_the_native_packet_width() {
         let device = EmbreeDevice::new(&EmbreeConfig { threads: Some(1), isa: Some(isa.into()), ..EmbreeConfig::default() }).expect(isa);
         assert_eq!(device.info().native_packet, width, "isa={isa}: {:?}", device.info());
         let scene = EmbreeSpheres::build(&device, &spheres, EmbreeQuality::Medium).expect(isa);
-        assert_agrees(&format!("embree isa={isa}"), &scene, &spheres, &rays, Tolerance::Relative);
+        reference.assert_agrees(&format!("embree isa={isa}"), &scene, Tolerance::RelativeToScale);
     }
 }

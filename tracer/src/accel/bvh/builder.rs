@@ -58,7 +58,9 @@ struct Builder<'a> {
 
 /// Builds a tree over `spheres` with the split rule and leaf size of `params`.
 pub fn build(spheres: &[Sphere], params: &BvhParams) -> BuiltTree {
-    debug_assert!(params.validate().is_ok());
+    if let Err(e) = params.validate() {
+        panic!("invalid BVH parameters: {e}");
+    }
     let boxes: Vec<Aabb> = spheres.iter().map(Sphere::bounds).collect();
     let centroids: Vec<Vec3> = spheres.iter().map(|s| s.center).collect();
     let mut prims: Vec<u32> = (0..spheres.len() as u32).collect();

@@ -3,7 +3,7 @@
 use super::builder::{self, FlatNode};
 use super::params::{BvhParams, Traversal};
 use super::stats::TreeStats;
-use super::traverse::{ChildOrder, Fixed, FrontToBack, TreeView, traverse};
+use super::traverse::{self, ChildOrder, OrderedQueries, TreeView, traverse};
 use crate::accel::{Accelerator, Hit};
 use crate::counters::Counters;
 use crate::geometry::{Aabb, Ray, Sphere};
@@ -42,6 +42,13 @@ impl FlatBvh {
         // SAFETY: indices come from the root (0; the builder always emits a root) or from an interior
         // node's `first`/`first + 1`, which the builder allocates before recording them.
         unsafe { self.nodes.get_unchecked(index as usize) }
+    }
+}
+
+impl OrderedQueries for FlatBvh {
+    #[inline(always)]
+    fn traversal(&self) -> Traversal {
+        self.params.traversal
     }
 
     #[inline(always)]
@@ -108,17 +115,11 @@ impl TreeView for FlatBvh {
 
 impl Accelerator for FlatBvh {
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
-        match self.params.traversal {
-            Traversal::Fixed => self.closest::<Fixed, C>(ray, counters),
-            Traversal::FrontToBack => self.closest::<FrontToBack, C>(ray, counters),
-        }
+        traverse::intersect(self, ray, counters)
     }
 
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
-        match self.params.traversal {
-            Traversal::Fixed => self.any::<Fixed, C>(ray, counters),
-            Traversal::FrontToBack => self.any::<FrontToBack, C>(ray, counters),
-        }
+        traverse::occluded(self, ray, counters)
     }
 
     fn stats(&self) -> TreeStats {

@@ -2,7 +2,8 @@
 //!
 //! - [`params`]: what a user chooses (leaf size, split rule, traversal order).
 //! - [`builder`]: the shared top-down builder; [`split`] holds one file per split rule, [`sah`] the cost model.
-//! - [`traverse`]: closest-hit/any-hit traversal, generic over tree layout, child order, counters and leaves.
+//! - [`traverse`]: closest-hit/any-hit traversal, generic over tree layout, child order, counters and leaves,
+//!   and the one dispatch from a tree's [`Traversal`] to the child order compiled for it.
 //! - [`Bvh`] (pointer tree, the paper's) and [`FlatBvh`] (one array) are the layouts.
 
 pub mod builder;

@@ -1,6 +1,7 @@
 //! The tree parameters a user chooses; serializable so that every recorded run names them.
 
 use std::fmt;
+use std::ops::RangeInclusive;
 
 use serde::{Deserialize, Serialize};
 
@@ -60,11 +61,11 @@ impl Traversal {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct BvhParams {
-    /// Largest number of spheres in a leaf, `1..=16`.
+    /// Largest number of spheres in a leaf, in [`BvhParams::LEAF_SIZES`].
     pub max_leaf_size: u32,
     /// The split rule.
     pub split: Split,
-    /// Bins per axis for [`Split::BinnedSah`], `2..=256`.
+    /// Bins per axis for [`Split::BinnedSah`], in [`BvhParams::SAH_BINS`].
     pub sah_bins: u32,
     /// The child visiting order.
     pub traversal: Traversal,
@@ -82,7 +83,7 @@ pub struct ParamError {
     /// The parameter's name.
     pub key: &'static str,
     /// The allowed values.
-    pub allowed: &'static str,
+    pub allowed: String,
     /// The value given.
     pub found: String,
 }
@@ -96,17 +97,20 @@ impl fmt::Display for ParamError {
 impl std::error::Error for ParamError {}
 
 impl BvhParams {
+    /// Allowed `max_leaf_size` values.
+    pub const LEAF_SIZES: RangeInclusive<u32> = 1..=16;
     /// Largest allowed `max_leaf_size`.
-    pub const MAX_LEAF_SIZE: u32 = 16;
+    pub const MAX_LEAF_SIZE: u32 = *Self::LEAF_SIZES.end();
+    /// Allowed `sah_bins` values.
+    pub const SAH_BINS: RangeInclusive<u32> = 2..=256;
 
-    /// Checks every range; builders assume valid parameters.
+    /// Checks every range; builders refuse invalid parameters.
     pub fn validate(&self) -> Result<(), ParamError> {
-        if !(1..=Self::MAX_LEAF_SIZE).contains(&self.max_leaf_size) {
-            return Err(ParamError { key: "max_leaf_size", allowed: "1..=16", found: self.max_leaf_size.to_string() });
-        }
-        if !(2..=256).contains(&self.sah_bins) {
-            return Err(ParamError { key: "sah_bins", allowed: "2..=256", found: self.sah_bins.to_string() });
-        }
-        Ok(())
+        let check = |key, range: RangeInclusive<u32>, value: u32| {
+            let allowed = format!("{}..={}", range.start(), range.end());
+            if range.contains(&value) { Ok(()) } else { Err(ParamError { key, allowed, found: value.to_string() }) }
+        };
+        check("max_leaf_size", Self::LEAF_SIZES, self.max_leaf_size)?;
+        check("sah_bins", Self::SAH_BINS, self.sah_bins)
     }
 }

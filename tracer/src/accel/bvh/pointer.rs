@@ -3,7 +3,7 @@
 use super::builder::{self, BuiltTree};
 use super::params::{BvhParams, Traversal};
 use super::stats::TreeStats;
-use super::traverse::{ChildOrder, Fixed, FrontToBack, TreeView, traverse};
+use super::traverse::{self, ChildOrder, OrderedQueries, TreeView, traverse};
 use crate::accel::{Accelerator, Hit};
 use crate::counters::Counters;
 use crate::geometry::{Aabb, Ray, Sphere};
@@ -73,6 +73,22 @@ impl Bvh {
         &self.root
     }
 
+    fn heap_bytes(node: &BvhNode) -> usize {
+        match &node.kind {
+            BvhNodeKind::Interior { left, right } => {
+                2 * std::mem::size_of::<BvhNode>() + Self::heap_bytes(left) + Self::heap_bytes(right)
+            }
+            BvhNodeKind::Leaf { prims } => prims.capacity() * std::mem::size_of::<u32>(),
+        }
+    }
+}
+
+impl OrderedQueries for Bvh {
+    #[inline(always)]
+    fn traversal(&self) -> Traversal {
+        self.params.traversal
+    }
+
     #[inline(always)]
     fn closest<O: ChildOrder, C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
         let mut best: Option<Hit> = None;
@@ -104,15 +120,6 @@ impl Bvh {
             found
         });
         found
-    }
-
-    fn heap_bytes(node: &BvhNode) -> usize {
-        match &node.kind {
-            BvhNodeKind::Interior { left, right } => {
-                2 * std::mem::size_of::<BvhNode>() + Self::heap_bytes(left) + Self::heap_bytes(right)
-            }
-            BvhNodeKind::Leaf { prims } => prims.capacity() * std::mem::size_of::<u32>(),
-        }
     }
 }
 
@@ -147,17 +154,11 @@ impl TreeView for Bvh {
 
 impl Accelerator for Bvh {
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
-        match self.params.traversal {
-            Traversal::Fixed => self.closest::<Fixed, C>(ray, counters),
-            Traversal::FrontToBack => self.closest::<FrontToBack, C>(ray, counters),
-        }
+        traverse::intersect(self, ray, counters)
     }
 
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
-        match self.params.traversal {
-            Traversal::Fixed => self.any::<Fixed, C>(ray, counters),
-            Traversal::FrontToBack => self.any::<FrontToBack, C>(ray, counters),
-        }
+        traverse::occluded(self, ray, counters)
     }
 
     fn stats(&self) -> TreeStats {

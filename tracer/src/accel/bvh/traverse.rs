@@ -3,6 +3,8 @@
 use std::mem::MaybeUninit;
 
 use super::builder::MAX_DEPTH;
+use super::params::Traversal;
+use crate::accel::Hit;
 use crate::counters::Counters;
 use crate::geometry::{Aabb, Ray, RayBoxTester};
 
@@ -38,6 +40,35 @@ impl ChildOrder for Fixed {
 pub struct FrontToBack;
 impl ChildOrder for FrontToBack {
     const NEAR_FIRST: bool = true;
+}
+
+/// A tree whose queries are compiled once per child order; [`intersect`] and [`occluded`] run the order it was
+/// built with.
+pub trait OrderedQueries {
+    /// The child order chosen at build time.
+    fn traversal(&self) -> Traversal;
+    /// The nearest hit, visiting children in order `O`.
+    fn closest<O: ChildOrder, C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit>;
+    /// Whether anything is hit, visiting children in order `O`.
+    fn any<O: ChildOrder, C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool;
+}
+
+/// The nearest hit in `tree`, in its chosen child order (a branch per ray; each order is its own compiled loop).
+#[inline(always)]
+pub fn intersect<T: OrderedQueries, C: Counters>(tree: &T, ray: &Ray, counters: &mut C) -> Option<Hit> {
+    match tree.traversal() {
+        Traversal::Fixed => tree.closest::<Fixed, C>(ray, counters),
+        Traversal::FrontToBack => tree.closest::<FrontToBack, C>(ray, counters),
+    }
+}
+
+/// Whether anything in `tree` is hit, in its chosen child order.
+#[inline(always)]
+pub fn occluded<T: OrderedQueries, C: Counters>(tree: &T, ray: &Ray, counters: &mut C) -> bool {
+    match tree.traversal() {
+        Traversal::Fixed => tree.any::<Fixed, C>(ray, counters),
+        Traversal::FrontToBack => tree.any::<FrontToBack, C>(ray, counters),
+    }
 }
 
 /// Visits every leaf whose box the ray enters before the current `t_max`, in the order `O` gives.

@@ -1,0 +1,94 @@
+//! Which settings a series makes irrelevant: those that apply to none of the configurations it can have.
+
+use std::collections::BTreeMap;
+
+use crate::columns::{Axis, AxisValue, Settings};
+
+/// The axes `fixed` names, plus every axis that applies to no configuration with those values (whatever
+/// the other named axes take), plus those it forces to one value (threads of a serial series). Speedup
+/// matching ignores them, so a series is compared with the reference whatever those columns say.
+pub fn fixed_axes(fixed: &BTreeMap<Axis, Vec<AxisValue>>) -> Vec<Axis> {
+    let free: Vec<Vec<AxisValue>> = Axis::ALL
+        .iter()
+        .map(|&a| match fixed.get(&a) {
+            Some(values) => values.clone(),
+            None => a.choices().unwrap_or_else(|| vec![a.default_value()]),
+        })
+        .collect();
+    let mut out: Vec<Axis> = fixed.keys().copied().collect();
+    for &axis in Axis::ALL.iter().filter(|a| !fixed.contains_key(a) && !a.always_applies()) {
+        let mut values = std::collections::BTreeSet::new();
+        let mut applies_somewhere = false;
+        each_combination(&free, |s| {
+            let n = s.normalized();
+            applies_somewhere |= n.applies(axis);
+            values.insert(n.get(axis).to_string());
+            !applies_somewhere
+        });
+        if !applies_somewhere && values.len() <= 1 {
+            out.push(axis);
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Calls `f` with every combination of `lists` (one list per axis, in [`Axis::ALL`] order) until it returns false.
+fn each_combination(lists: &[Vec<AxisValue>], mut f: impl FnMut(&Settings) -> bool) {
+    let mut index = vec![0usize; lists.len()];
+    let mut settings = Settings::default();
+    for list in lists {
+        settings.set(list[0].clone());
+    }
+    loop {
+        if !f(&settings) {
+            return;
+        }
+        let mut i = lists.len();
+        loop {
+            if i == 0 {
+                return;
+            }
+            i -= 1;
+            index[i] += 1;
+            if index[i] < lists[i].len() {
+                settings.set(lists[i][index[i]].clone());
+                break;
+            }
+            index[i] = 0;
+            settings.set(lists[i][0].clone());
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::names::{Accel, Named};
+    use tracer::accel::{AccelKind, Traversal};
+    use tracer::executor::StrategyKind;
+
+    fn keys(fixed: &[AxisValue]) -> String {
+        let map = fixed.iter().map(|v| (v.axis(), vec![v.clone()])).collect();
+        fixed_axes(&map).into_iter().map(Axis::key).collect::<Vec<_>>().join(",")
+    }
+
+    #[test]
+    fn series_fix_the_columns_their_accelerator_makes_irrelevant() {
+        let flat = AxisValue::accel(Accel::Ours(AccelKind::FlatBvh));
+        assert_eq!(
+            keys(&[flat, AxisValue::traversal(Some(Traversal::FrontToBack))]),
+            "accel,traversal,obvhs_build,embree_build,embree_isa"
+        );
+        let obvhs = Accel::from_name(crate::names::PeerKind::ObvhsBvh2.name()).unwrap();
+        assert_eq!(
+            keys(&[AxisValue::accel(obvhs)]),
+            "accel,split,leaf_size,sah_bins,traversal,embree_build,embree_isa"
+        );
+        let list = AxisValue::accel(Accel::Ours(AccelKind::List));
+        assert_eq!(
+            keys(&[AxisValue::strategy(StrategyKind::Serial), list]),
+            "accel,split,leaf_size,sah_bins,traversal,strategy,threads,obvhs_build,embree_build,embree_isa"
+        );
+    }
+}

@@ -1,0 +1,184 @@
+//! The declaration: every column of a row, identity first, then the settings (the axes of a sweep), then
+//! the measures. Adding a setting is one entry here (plus the tracer code that uses it).
+
+use tracer::accel::{AccelKind, AccelParams, BvhParams, Split, Traversal};
+use tracer::executor::{Strategy, StrategyKind};
+use tracer::scene::SceneKind;
+
+use crate::names::{Accel, EmbreeIsa, EmbreeQuality, ObvhsQuality, PeerKind, SceneName, Threads, Workload};
+
+declare_columns! {
+    identity {
+        /// Experiment name from the config.
+        experiment: String;
+        /// 16 hex digits, stable hash of the series and the settings; equal for all repetitions of one configuration.
+        config_id: String;
+        /// Series label.
+        series: String;
+        /// 0-based repetition index within the configuration.
+        repetition: u32;
+    }
+    settings {
+        /// Scene generator, or `sphere-file` (then objects and seed come from the file).
+        scene: SceneName = SceneName::Generated(SceneKind::RandomSpheres);
+        /// Number of spheres.
+        objects: u64 = 1000, range(0, 10_000_000), unit "spheres";
+        /// Scene seed (0 for sphere files).
+        seed: u64 = 1, range(0, i64::MAX), applies generated_scene else 0;
+        /// Acceleration structure: the tracer's or a peer's.
+        accel: Accel = Accel::Ours(AccelKind::FlatBvh);
+        /// Split rule of the tracer's trees.
+        split: Option<Split> = Some(BvhParams::default().split), applies tree else None;
+        /// Largest leaf of the tracer's trees.
+        leaf_size: Option<u32> = Some(BvhParams::default().max_leaf_size),
+            range(*BvhParams::LEAF_SIZES.start(), *BvhParams::LEAF_SIZES.end()), applies tree else None, unit "spheres";
+        /// Bins per axis of the binned SAH split.
+        sah_bins: Option<u32> = Some(BvhParams::default().sah_bins),
+            range(*BvhParams::SAH_BINS.start(), *BvhParams::SAH_BINS.end()), applies binned_sah else None;
+        /// Child visiting order of the tracer's trees.
+        traversal: Option<Traversal> = Some(BvhParams::default().traversal), applies tree else None;
+        /// Parallel strategy.
+        strategy: StrategyKind = StrategyKind::Serial;
+        /// Worker threads actually used (`all` in a config: the machine's logical cores; 1 for serial).
+        threads: Threads = Threads::All, range(1, 4096), applies parallel else Threads::Count(1);
+        /// Image width.
+        width: u32 = 320, range(1, 16384), unit "px";
+        /// Image height.
+        height: u32 = 240, range(1, 16384), unit "px";
+        /// Reflection bounces of the render workload.
+        max_depth: u32 = 3, range(0, 64), applies render else 0;
+        /// `render` (full shading and PNG encoding) or a fixed ray set: `primary`, `shadow`, `diffuse`.
+        workload: Workload = Workload::Render;
+        /// obvhs build preset.
+        obvhs_build: Option<ObvhsQuality> = Some(ObvhsQuality::Medium), applies obvhs else None;
+        /// Embree build quality.
+        embree_build: Option<EmbreeQuality> = Some(EmbreeQuality::Medium), applies embree else None;
+        /// Instruction set Embree is pinned to (`default`: Embree's choice).
+        embree_isa: Option<EmbreeIsa> = Some(EmbreeIsa::Default), applies embree else None;
+    }
+    measures {
+        /// Wall time of scene generation.
+        scene_s: f64, Metric, unit "s", decimals 9;
+        /// Wall time of building the structure.
+        build_s: f64, Metric, unit "s", decimals 9;
+        /// Wall time of tracing (rendering without encoding, or the ray set).
+        trace_s: f64, Metric, unit "s", decimals 9;
+        /// Wall time of PNG encoding (0 for ray sets).
+        encode_s: f64, Metric, unit "s", decimals 9;
+        /// Sum of the phases.
+        total_s: f64, Metric, unit "s", decimals 9;
+        /// Rays traced (from the counted pass).
+        rays: u64, Counter, unit "rays";
+        /// Rays / trace_s / 1e6.
+        mrays_per_s: f64, Metric, unit "Mrays/s", decimals 6;
+        /// Nodes visited per ray (counted pass).
+        nodes_per_ray: f64, Counter, decimals 6;
+        /// Ray-box tests per ray (counted pass).
+        box_tests_per_ray: f64, Counter, decimals 6;
+        /// Ray-sphere tests per ray (counted pass).
+        prim_tests_per_ray: f64, Counter, decimals 6;
+        /// Nodes of the built structure.
+        tree_nodes: u64, Counter;
+        /// Leaves of the built structure.
+        tree_leaves: u64, Counter;
+        /// Depth of the built structure.
+        tree_depth: u64, Counter;
+        /// Bytes of the built structure.
+        tree_bytes: u64, Counter, unit "bytes";
+        /// SAH cost of the built structure (unit traversal and intersection costs).
+        sah_cost: f64, Counter, decimals 6;
+        /// 16 hex digits: image hash (render) or hash of the ray set's answers.
+        image_hash: String, Counter;
+        /// 16 hex digits: the scene's fingerprint.
+        scene_fingerprint: String, Counter;
+        /// Commit of the working tree (`unknown` outside git).
+        git_commit: String, Provenance;
+        /// True when the tree had uncommitted changes.
+        git_dirty: bool, Provenance;
+        /// `rustc --version` of the compiler that built the harness.
+        rustc: String, Provenance;
+        /// CPU model name.
+        cpu_model: String, Provenance;
+        /// Logical cores of the machine.
+        logical_cores: u32, Provenance;
+        /// 1-minute load average just before the run.
+        load_avg_1m: f64, Provenance, decimals 2;
+        /// RFC 3339 UTC time the run started.
+        timestamp: String, Provenance;
+        /// Harness crate version.
+        harness_version: String, Provenance;
+        /// `exact` when the backend agreed with the reference, `FAILED` (and no timings) when it did not.
+        validation: String, Validation;
+        /// The reference the backend was validated against.
+        validated_against: String, Validation;
+        /// Rays whose answers disagreed with the reference.
+        mismatches: u64, Validation;
+        /// Peer library facts (`-` for the tracer's structures).
+        peer_info: String, Provenance = "-".to_string();
+    }
+}
+
+// Where each setting applies (the `applies` predicates of the declaration).
+
+/// Generated scenes have a seed; sphere files do not.
+fn generated_scene(s: &Settings) -> bool {
+    s.scene != SceneName::SphereFile
+}
+
+/// The tracer's trees have tree settings.
+fn tree(s: &Settings) -> bool {
+    s.accel.is_tree()
+}
+
+/// Only the binned SAH split has bins.
+fn binned_sah(s: &Settings) -> bool {
+    tree(s) && s.split == Some(Split::BinnedSah)
+}
+
+/// Serial runs use one thread.
+fn parallel(s: &Settings) -> bool {
+    s.strategy != StrategyKind::Serial
+}
+
+/// Only rendering reflects.
+fn render(s: &Settings) -> bool {
+    s.workload == Workload::Render
+}
+
+/// obvhs's presets.
+fn obvhs(s: &Settings) -> bool {
+    s.accel.peer().is_some_and(PeerKind::is_obvhs)
+}
+
+/// Embree's settings.
+fn embree(s: &Settings) -> bool {
+    s.accel.peer().is_some_and(PeerKind::needs_embree)
+}
+
+impl Settings {
+    /// The tracer's structure and tree parameters (a peer's settings give the list, which is never built).
+    pub fn accel_params(&self) -> AccelParams {
+        let default = BvhParams::default();
+        let kind = match self.accel {
+            Accel::Ours(kind) => kind,
+            Accel::Peer(_) => AccelKind::List,
+        };
+        let bvh = BvhParams {
+            max_leaf_size: self.leaf_size.unwrap_or(default.max_leaf_size),
+            split: self.split.unwrap_or(default.split),
+            sah_bins: self.sah_bins.unwrap_or(default.sah_bins),
+            traversal: self.traversal.unwrap_or(default.traversal),
+        };
+        AccelParams { kind, bvh }
+    }
+
+    /// The strategy and its thread count (`threads = "all"` must have been resolved).
+    pub fn strategy(&self) -> Strategy {
+        Strategy::new(self.strategy, self.threads.resolve(1) as usize)
+    }
+
+    /// The peer backend, if the accelerator is one.
+    pub fn peer(&self) -> Option<PeerKind> {
+        self.accel.peer()
+    }
+}

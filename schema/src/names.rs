@@ -1,0 +1,299 @@
+//! Named choices: every enum a setting can take, with its kebab-case name (the only spelling of the name
+//! outside its declaration is the config, the CSV and the command line).
+
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+use tracer::accel::{AccelKind, Split, Traversal};
+use tracer::executor::StrategyKind;
+use tracer::rays::RayKind;
+use tracer::scene::SceneKind;
+
+/// An enum of named choices.
+pub trait Named: Copy + Eq + fmt::Debug + Send + Sync + 'static {
+    /// Every choice, in the order tools list them.
+    const ALL: &'static [Self];
+    /// The kebab-case name used in configs, rows and on the command line.
+    fn name(self) -> &'static str;
+    /// The choice called `name`.
+    fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.iter().copied().find(|c| c.name() == name)
+    }
+    /// Every name, comma-separated (for "allowed: …" messages).
+    fn names() -> String {
+        Self::ALL.iter().map(|c| c.name()).collect::<Vec<_>>().join(", ")
+    }
+}
+
+/// Implements [`Named`] for an enum that has `ALL` and `name()` of its own.
+macro_rules! named_by_inherent {
+    ($($t:ty),*) => {$(
+        impl Named for $t {
+            const ALL: &'static [Self] = &<$t>::ALL;
+            fn name(self) -> &'static str {
+                <$t>::name(self)
+            }
+        }
+    )*};
+}
+
+named_by_inherent!(AccelKind, Split, Traversal, StrategyKind, SceneKind, RayKind);
+
+/// Declares a kebab-case enum with its names, `ALL`, `Display` and `Named`.
+macro_rules! named_enum {
+    ($(#[doc = $doc:literal])* $name:ident { $($(#[doc = $vdoc:literal])* $variant:ident = $text:literal,)+ }) => {
+        $(#[doc = $doc])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+        pub enum $name {
+            $($(#[doc = $vdoc])* #[serde(rename = $text)] $variant,)+
+        }
+        impl Named for $name {
+            const ALL: &'static [Self] = &[$($name::$variant,)+];
+            fn name(self) -> &'static str {
+                match self {
+                    $($name::$variant => $text,)+
+                }
+            }
+        }
+        impl fmt::Display for $name {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str(self.name())
+            }
+        }
+    };
+}
+
+named_enum! {
+    /// Which peer backend to run.
+    PeerKind {
+        /// obvhs 0.4's binary BVH.
+        ObvhsBvh2 = "obvhs-bvh2",
+        /// obvhs 0.4's compressed wide BVH8.
+        ObvhsCwbvh = "obvhs-cwbvh",
+        /// Embree 4 queried one ray at a time (`rtcIntersect1` / `rtcOccluded1`).
+        Embree = "embree",
+        /// Embree 4 queried 16 rays at a time (`rtcIntersect16`).
+        EmbreePackets = "embree-packets",
+    }
+}
+
+impl PeerKind {
+    /// True for the peers that need the Embree library.
+    pub fn needs_embree(self) -> bool {
+        matches!(self, PeerKind::Embree | PeerKind::EmbreePackets)
+    }
+
+    /// True for obvhs's structures.
+    pub fn is_obvhs(self) -> bool {
+        matches!(self, PeerKind::ObvhsBvh2 | PeerKind::ObvhsCwbvh)
+    }
+}
+
+named_enum! {
+    /// obvhs 0.4's build presets: each is `BvhBuildParams::<name>_build()` (`medium` is "around Embree's build
+    /// time, faster traversal").
+    ObvhsQuality { Fastest = "fastest", VeryFast = "very-fast", Fast = "fast", Medium = "medium", Slow = "slow", VerySlow = "very-slow", }
+}
+
+named_enum! {
+    /// Embree's BVH build quality (`RTC_BUILD_QUALITY_*`).
+    EmbreeQuality {
+        /// `RTC_BUILD_QUALITY_LOW`.
+        Low = "low",
+        /// `RTC_BUILD_QUALITY_MEDIUM` (Embree's default).
+        Medium = "medium",
+        /// `RTC_BUILD_QUALITY_HIGH`.
+        High = "high",
+    }
+}
+
+named_enum! {
+    /// The instruction set Embree is pinned to (`isa=` in the device config); `default` lets Embree pick the best
+    /// the CPU has.
+    EmbreeIsa { Default = "default", Sse2 = "sse2", Sse42 = "sse4.2", Avx = "avx", Avx2 = "avx2", Avx512 = "avx512", }
+}
+
+impl EmbreeIsa {
+    /// The `isa=` value to pin, `None` for [`EmbreeIsa::Default`].
+    pub fn pinned(self) -> Option<&'static str> {
+        (self != EmbreeIsa::Default).then(|| self.name())
+    }
+}
+
+impl Default for ObvhsQuality {
+    fn default() -> Self {
+        ObvhsQuality::Medium
+    }
+}
+
+impl Default for EmbreeQuality {
+    fn default() -> Self {
+        EmbreeQuality::Medium
+    }
+}
+
+/// The accelerator of a configuration: one of the tracer's structures or a peer's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Accel {
+    /// The tracer's structure.
+    Ours(AccelKind),
+    /// A peer backend.
+    Peer(PeerKind),
+}
+
+impl Named for Accel {
+    const ALL: &'static [Self] = &[
+        Accel::Ours(AccelKind::List),
+        Accel::Ours(AccelKind::Bvh),
+        Accel::Ours(AccelKind::FlatBvh),
+        Accel::Peer(PeerKind::ObvhsBvh2),
+        Accel::Peer(PeerKind::ObvhsCwbvh),
+        Accel::Peer(PeerKind::Embree),
+        Accel::Peer(PeerKind::EmbreePackets),
+    ];
+    fn name(self) -> &'static str {
+        match self {
+            Accel::Ours(k) => k.name(),
+            Accel::Peer(p) => p.name(),
+        }
+    }
+}
+
+impl Accel {
+    /// The peer, if this is one.
+    pub fn peer(self) -> Option<PeerKind> {
+        match self {
+            Accel::Peer(p) => Some(p),
+            Accel::Ours(_) => None,
+        }
+    }
+
+    /// True for the tracer's trees (`bvh`, `flat-bvh`): the tree settings apply.
+    pub fn is_tree(self) -> bool {
+        matches!(self, Accel::Ours(AccelKind::Bvh | AccelKind::FlatBvh))
+    }
+}
+
+/// Where a configuration's spheres come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SceneName {
+    /// One of the tracer's generators.
+    Generated(SceneKind),
+    /// The experiment's sphere file (`sweep.sphere_file`).
+    SphereFile,
+}
+
+impl Named for SceneName {
+    const ALL: &'static [Self] = &[
+        SceneName::Generated(SceneKind::RandomSpheres),
+        SceneName::Generated(SceneKind::ClusteredSpheres),
+        SceneName::SphereFile,
+    ];
+    fn name(self) -> &'static str {
+        match self {
+            SceneName::Generated(k) => k.name(),
+            SceneName::SphereFile => "sphere-file",
+        }
+    }
+}
+
+/// What a run computes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Workload {
+    /// Full Whitted shading and PNG encoding.
+    Render,
+    /// One fixed ray set (primary, shadow or diffuse rays), the same for every backend.
+    Rays(RayKind),
+}
+
+impl Named for Workload {
+    const ALL: &'static [Self] = &[
+        Workload::Render,
+        Workload::Rays(RayKind::Primary),
+        Workload::Rays(RayKind::Shadow),
+        Workload::Rays(RayKind::Diffuse),
+    ];
+    fn name(self) -> &'static str {
+        match self {
+            Workload::Render => "render",
+            Workload::Rays(k) => k.name(),
+        }
+    }
+}
+
+impl Workload {
+    /// The ray kind a workload is validated with (the render workload: its primary rays).
+    pub fn validation_kind(self) -> RayKind {
+        match self {
+            Workload::Rays(k) => k,
+            Workload::Render => RayKind::Primary,
+        }
+    }
+}
+
+/// A thread count as configs give it: a number, or every logical core of the machine that runs it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Threads {
+    /// The machine's logical cores.
+    All,
+    /// Exactly this many.
+    Count(u32),
+}
+
+impl Threads {
+    /// The config word for [`Threads::All`].
+    pub const ALL_WORD: &'static str = "all";
+
+    /// [`Threads::All`] for the config word `all`.
+    pub fn from_word(word: &str) -> Option<Threads> {
+        (word == Threads::ALL_WORD).then_some(Threads::All)
+    }
+
+    /// The thread count on a machine with `cores` logical cores (the one place `"all"` is resolved).
+    pub fn resolve(self, cores: usize) -> u32 {
+        match self {
+            Threads::All => cores as u32,
+            Threads::Count(n) => n,
+        }
+    }
+}
+
+impl fmt::Display for Threads {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Threads::All => f.write_str(Threads::ALL_WORD),
+            Threads::Count(n) => write!(f, "{n}"),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn round_trip<T: Named>() {
+        for &c in T::ALL {
+            assert_eq!(T::from_name(c.name()), Some(c));
+        }
+        let mut names: Vec<_> = T::ALL.iter().map(|c| c.name()).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), T::ALL.len(), "names are distinct");
+    }
+
+    #[test]
+    fn names_round_trip_and_are_distinct() {
+        round_trip::<Accel>();
+        round_trip::<SceneName>();
+        round_trip::<Workload>();
+        round_trip::<Split>();
+        round_trip::<Traversal>();
+        round_trip::<StrategyKind>();
+        round_trip::<PeerKind>();
+        round_trip::<ObvhsQuality>();
+        round_trip::<EmbreeQuality>();
+        round_trip::<EmbreeIsa>();
+        assert_eq!(Accel::ALL.len(), AccelKind::ALL.len() + PeerKind::ALL.len());
+        assert!(PeerKind::from_name("embree4").is_none());
+    }
+}

@@ -1,0 +1,250 @@
+//! Columns as metadata, cells, configuration ids, and `runs.csv` as the csv crate reads and writes it.
+
+use std::fmt;
+use std::io;
+
+use tracer::fingerprint::Fnv64;
+
+pub use crate::columns::COLUMNS;
+use crate::columns::{Row, Settings};
+
+/// A column's type in rows and frames.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// Text (names, hashes, labels).
+    Text,
+    /// A signed integer.
+    Int,
+    /// A float.
+    Float,
+    /// `true` / `false`.
+    Bool,
+}
+
+/// What a column is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Role {
+    /// Which experiment, configuration, series and repetition the row is.
+    Identity,
+    /// A setting of the configuration (an axis).
+    Setting,
+    /// A timing or throughput: varies between repetitions.
+    Metric,
+    /// Deterministic: the same in every repetition and on every machine (work counters, tree statistics, hashes).
+    Counter,
+    /// Where and how the row was recorded.
+    Provenance,
+    /// The outcome of validating the backend before timing.
+    Validation,
+}
+
+/// One column of `runs.csv`.
+#[derive(Clone, Copy, Debug)]
+pub struct Column {
+    /// Header name.
+    pub name: &'static str,
+    /// Type.
+    pub kind: Kind,
+    /// What it is for.
+    pub role: Role,
+    /// Unit (empty for names and counts).
+    pub unit: &'static str,
+    /// Meaning, one line.
+    pub doc: &'static str,
+}
+
+impl Column {
+    /// The column called `name`.
+    pub fn named(name: &str) -> Option<&'static Column> {
+        COLUMNS.iter().find(|c| c.name == name)
+    }
+
+    /// True for numeric columns.
+    pub fn is_numeric(&self) -> bool {
+        matches!(self.kind, Kind::Int | Kind::Float)
+    }
+}
+
+/// The names of the columns with `role`, in row order.
+pub fn names_of(role: Role) -> Vec<&'static str> {
+    COLUMNS.iter().filter(|c| c.role == role).map(|c| c.name).collect()
+}
+
+/// The setting columns, in row order (a configuration is a series plus these).
+pub fn setting_names() -> Vec<&'static str> {
+    names_of(Role::Setting)
+}
+
+/// The deterministic columns, compared exactly between runs and carried into summaries.
+pub fn counter_names() -> Vec<&'static str> {
+    names_of(Role::Counter)
+}
+
+/// The columns a plot's y or a claim may use: float metrics and float counters.
+pub fn plottable_names() -> Vec<&'static str> {
+    COLUMNS
+        .iter()
+        .filter(|c| c.kind == Kind::Float && matches!(c.role, Role::Metric | Role::Counter))
+        .map(|c| c.name)
+        .collect()
+}
+
+/// The key of a seed pool: series plus every setting except `seed` (runs that differ only in the seed
+/// stand for the same point).
+pub fn pool_key(series: &str, setting_text: impl Fn(&str) -> String) -> Vec<String> {
+    let mut key = vec![series.to_string()];
+    key.extend(setting_names().into_iter().filter(|c| *c != "seed").map(setting_text));
+    key
+}
+
+/// One value of a row.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Cell {
+    /// Text.
+    Text(String),
+    /// An integer.
+    Int(i64),
+    /// A float.
+    Float(f64),
+    /// A boolean.
+    Bool(bool),
+}
+
+impl Cell {
+    /// The value as a number (NaN for text).
+    pub fn number(&self) -> f64 {
+        match self {
+            Cell::Int(i) => *i as f64,
+            Cell::Float(x) => *x,
+            Cell::Bool(_) | Cell::Text(_) => f64::NAN,
+        }
+    }
+}
+
+impl fmt::Display for Cell {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Cell::Text(s) => f.write_str(s),
+            Cell::Int(i) => write!(f, "{i}"),
+            Cell::Float(x) => write!(f, "{x}"),
+            Cell::Bool(b) => write!(f, "{b}"),
+        }
+    }
+}
+
+/// The Rust type of a non-setting column.
+pub trait MeasureType {
+    /// Its type in rows and frames.
+    const KIND: Kind;
+    /// The value as a cell.
+    fn cell(&self) -> Cell;
+}
+
+impl MeasureType for String {
+    const KIND: Kind = Kind::Text;
+    fn cell(&self) -> Cell {
+        Cell::Text(self.clone())
+    }
+}
+
+impl MeasureType for bool {
+    const KIND: Kind = Kind::Bool;
+    fn cell(&self) -> Cell {
+        Cell::Bool(*self)
+    }
+}
+
+impl MeasureType for f64 {
+    const KIND: Kind = Kind::Float;
+    fn cell(&self) -> Cell {
+        Cell::Float(*self)
+    }
+}
+
+macro_rules! integer_measure {
+    ($($t:ty),*) => {$(
+        impl MeasureType for $t {
+            const KIND: Kind = Kind::Int;
+            fn cell(&self) -> Cell {
+                Cell::Int(*self as i64)
+            }
+        }
+    )*};
+}
+
+integer_measure!(u32, u64, usize);
+
+/// `x` rounded to `decimals` decimal places (non-finite values unchanged).
+pub fn round(x: f64, decimals: i32) -> f64 {
+    if !x.is_finite() {
+        return x;
+    }
+    format!("{x:.*}", decimals as usize).parse().unwrap_or(x)
+}
+
+/// The stable id of a configuration: 16 hex digits of FNV-1a over the series label and the setting cells
+/// ([`Settings::id_cells`]).
+pub fn config_id(series: &str, settings: &Settings) -> String {
+    let mut h = Fnv64::default();
+    h.bytes(series.as_bytes()).bytes(b"\x1f");
+    for cell in settings.id_cells() {
+        h.bytes(cell.to_string().as_bytes()).bytes(b"\x1f");
+    }
+    format!("{:016x}", h.finish())
+}
+
+/// The header line of `runs.csv` (no line end).
+pub fn header() -> String {
+    COLUMNS.iter().map(|c| c.name).collect::<Vec<_>>().join(",")
+}
+
+/// `row` as one CSV line with its line end.
+pub fn csv_line(row: &Row) -> io::Result<String> {
+    let mut writer = csv::WriterBuilder::new().has_headers(false).from_writer(Vec::new());
+    writer.serialize(row).map_err(io::Error::other)?;
+    let bytes = writer.into_inner().map_err(|e| io::Error::other(e.to_string()))?;
+    String::from_utf8(bytes).map_err(io::Error::other)
+}
+
+/// A `runs.csv` text that could not be read.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ReadError {
+    /// 1-based line, when known.
+    pub line: Option<u64>,
+    /// The column the header lacks, when that is what is wrong.
+    pub missing_column: Option<&'static str>,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl fmt::Display for ReadError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.line {
+            Some(l) => write!(f, "line {l}: {}", self.message),
+            None => f.write_str(&self.message),
+        }
+    }
+}
+
+/// Reads every row of a `runs.csv` text. Columns are matched by name: columns this version does not know
+/// are ignored, and settings added after a file was recorded (`added` in the declaration) take their
+/// default, normalized; every other column must be there.
+pub fn read_rows(text: &str) -> Result<Vec<Row>, ReadError> {
+    let mut reader = csv::ReaderBuilder::new().has_headers(true).from_reader(text.as_bytes());
+    let error = |line, message: String| ReadError { line, missing_column: None, message };
+    let header = reader.headers().map_err(|e| error(Some(1), e.to_string()))?.clone();
+    let optional = |c: &Column| crate::columns::Axis::from_key(c.name).is_some_and(|a| a.added());
+    if let Some(c) = COLUMNS.iter().find(|c| !optional(c) && !header.iter().any(|h| h == c.name)) {
+        return Err(ReadError {
+            missing_column: Some(c.name),
+            ..error(Some(1), format!("missing column {:?}", c.name))
+        });
+    }
+    let mut rows = Vec::new();
+    for record in reader.deserialize::<Row>() {
+        let mut row: Row = record.map_err(|e| error(e.position().map(|p| p.line()), e.to_string()))?;
+        row.set_settings(&row.settings().normalized());
+        rows.push(row);
+    }
+    Ok(rows)
+}

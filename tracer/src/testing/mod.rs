@@ -1,0 +1,64 @@
+//! Test support shared by the tracer's tests and the harness's peer tests (feature `testing`).
+//!
+//! One definition of "agrees with brute force" for every backend:
+//! - [`every_tree`]: every BVH configuration the tracer can build;
+//! - [`sphere_ray_mix`] and [`scene_ray_mix`]: ray sets that mix ordinary rays with the cases where traversal
+//!   and intersection go wrong (grazing, inside, finite, non-unit rays and secondary rays);
+//! - [`scenes`]: the generated scenes, each with its [`scene_ray_mix`];
+//! - [`Reference`]: brute force's answers to a ray set, compared with an accelerator's under a [`Tolerance`];
+//!   [`assert_every_tree_agrees`] checks every tree configuration at once.
+//!
+//! Enabled for this crate's own tests and, in other crates' tests, by the `testing` feature
+//! (`tracer = { workspace = true, features = ["testing"] }` under `[dev-dependencies]`).
+
+mod agree;
+mod rays;
+
+pub use agree::{Comparison, GRAZING, Reference, Tolerance, assert_every_tree_agrees};
+pub use rays::{scene_ray_mix, sphere_ray_mix};
+
+use crate::accel::{AccelKind, AccelParams, BvhParams, Split, Traversal};
+use crate::geometry::{Ray, Sphere};
+use crate::scene::SceneKind;
+
+/// Every tree configuration: both layouts × every split × leaf sizes `1..=16` × both traversal orders (16 SAH bins).
+pub fn every_tree() -> Vec<AccelParams> {
+    let mut all = Vec::new();
+    for kind in [AccelKind::Bvh, AccelKind::FlatBvh] {
+        for split in Split::ALL {
+            for max_leaf_size in 1..=BvhParams::MAX_LEAF_SIZE {
+                for traversal in Traversal::ALL {
+                    let bvh = BvhParams { max_leaf_size, split, traversal, sah_bins: 16 };
+                    all.push(AccelParams { kind, bvh });
+                }
+            }
+        }
+    }
+    all
+}
+
+/// A generated scene's spheres with its ray mix, named for failure messages.
+#[derive(Clone, Debug)]
+pub struct TestScene {
+    /// `"{kind} n={spheres} seed={seed}"`.
+    pub label: String,
+    /// The scene's spheres.
+    pub spheres: Vec<Sphere>,
+    /// [`scene_ray_mix`] of the scene with seed `seed ^ 0x5eed`.
+    pub rays: Vec<Ray>,
+}
+
+/// Every test scene: both scene kinds × 0, 1, 50 and 2000 spheres × seeds 1 and 2 (16 scenes), in that order.
+pub fn scenes() -> Vec<TestScene> {
+    let mut all = Vec::new();
+    for kind in SceneKind::ALL {
+        for n in [0, 1, 50, 2000] {
+            for seed in [1u64, 2] {
+                let scene = kind.generate(n, seed);
+                let rays = scene_ray_mix(&scene, seed ^ 0x5eed);
+                all.push(TestScene { label: format!("{} n={n} seed={seed}", kind.name()), spheres: scene.spheres, rays });
+            }
+        }
+    }
+    all
+}
