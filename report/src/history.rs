@@ -7,20 +7,16 @@ use std::path::{Path, PathBuf};
 use tracer::fingerprint::Fnv64;
 
 use crate::check::{CheckOptions, counters, speedups};
-use crate::csv::{field as quote, split_line as split};
 use crate::error::Error;
 use crate::figures::chart::{self, Chart, ChartPoint, Line};
 use crate::rows;
 use crate::spec::ReportSpec;
 
-/// The history file's columns.
-const HEADER: &str = "experiment,commit,dirty,timestamp,series,point,speedup,lower,upper,counters";
-
 /// A drop of the speedup by more than this fraction from the previous entry is marked as a regression.
 pub const REGRESSION: f64 = 0.10;
 
-/// One line of `history.csv`.
-#[derive(Clone, Debug, PartialEq)]
+/// One line of `history.csv` (the header names these fields).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 struct Entry {
     experiment: String,
     commit: String,
@@ -36,28 +32,10 @@ struct Entry {
 
 fn read(path: &Path) -> Result<Vec<Entry>, Error> {
     let Ok(text) = std::fs::read_to_string(path) else { return Ok(vec![]) };
-    text.lines()
-        .skip(1)
-        .map(|l| {
-            let f = split(l);
-            let num = |i: usize| f.get(i).and_then(|v| v.parse().ok()).unwrap_or(f64::NAN);
-            if f.len() != 10 {
-                return Err(Error::Mismatch { path: path.into(), message: format!("malformed line {l:?}") });
-            }
-            Ok(Entry {
-                experiment: f[0].clone(),
-                commit: f[1].clone(),
-                dirty: f[2].clone(),
-                timestamp: f[3].clone(),
-                series: f[4].clone(),
-                point: f[5].clone(),
-                speedup: num(6),
-                lower: num(7),
-                upper: num(8),
-                counters: f[9].clone(),
-            })
-        })
-        .collect()
+    csv::Reader::from_reader(text.as_bytes())
+        .deserialize()
+        .collect::<Result<Vec<Entry>, _>>()
+        .map_err(|e| Error::Mismatch { path: path.into(), message: format!("malformed history: {e}") })
 }
 
 /// Appends every speedup of `run_dir` (against `spec.reference`, same run) to `history_dir/history.csv`;
@@ -89,27 +67,28 @@ pub fn append(run_dir: &Path, spec: &ReportSpec, history_dir: &Path, options: &C
     if existing.iter().any(|e| e.experiment == experiment && e.commit == commit && e.timestamp == timestamp) {
         return Err(Error::Mismatch { path, message: format!("{} is already in the history", run_dir.display()) });
     }
-    let mut text = if existing.is_empty() { format!("{HEADER}\n") } else { String::new() };
     let points = speedups(spec, reference, &rows.runs, &rows.runs, options);
+    let mut writer = csv::WriterBuilder::new().has_headers(existing.is_empty()).from_writer(Vec::new());
     for p in &points {
-        text.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{}\n",
-            quote(&experiment),
-            commit,
-            first.text("git_dirty"),
-            timestamp,
-            quote(&p.series),
-            quote(&p.point),
-            p.new.value,
-            p.new.lo,
-            p.new.hi,
-            counters
-        ));
+        let entry = Entry {
+            experiment: experiment.clone(),
+            commit: commit.clone(),
+            dirty: first.text("git_dirty").to_string(),
+            timestamp: timestamp.clone(),
+            series: p.series.clone(),
+            point: p.point.clone(),
+            speedup: p.new.value,
+            lower: p.new.lo,
+            upper: p.new.hi,
+            counters: counters.clone(),
+        };
+        writer.serialize(entry).map_err(|e| Error::write(&path, e))?;
     }
+    let text = writer.into_inner().map_err(|e| Error::write(&path, e.to_string()))?;
     std::fs::create_dir_all(history_dir).map_err(|e| Error::write(history_dir, e))?;
     use std::io::Write as _;
     let mut file = std::fs::OpenOptions::new().create(true).append(true).open(&path).map_err(|e| Error::write(&path, e))?;
-    file.write_all(text.as_bytes()).map_err(|e| Error::write(&path, e))?;
+    file.write_all(&text).map_err(|e| Error::write(&path, e))?;
     Ok(points.len())
 }
 

@@ -7,7 +7,6 @@
 //! percentile-bootstrap intervals from [`stats`], seeded from fixed keys so reports are reproducible.
 
 pub mod check;
-pub mod csv;
 pub mod history;
 pub mod spec;
 
