@@ -53,7 +53,13 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
     let scene_s = t0.elapsed().as_secs_f64();
     let params = AccelParams {
         kind: args.accel,
-        bvh: BvhParams { max_leaf_size: args.leaf_size, split: args.split, sah_bins: args.sah_bins, traversal: args.traversal },
+        bvh: BvhParams {
+            max_leaf_size: args.leaf_size,
+            split: args.split,
+            sah_bins: args.sah_bins,
+            traversal: args.traversal,
+            ..BvhParams::default()
+        },
     };
     let threads = args.threads.map_or_else(available_threads, |t| t as usize);
     let strategy = Strategy::new(args.strategy, threads);
