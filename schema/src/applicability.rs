@@ -64,31 +64,18 @@ fn each_combination(lists: &[Vec<AxisValue>], mut f: impl FnMut(&Settings) -> bo
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::names::{Accel, Named};
-    use tracer::accel::{AccelKind, Traversal};
+    use crate::names::Accel;
+    use tracer::accel::AccelKind;
     use tracer::executor::StrategyKind;
 
-    fn keys(fixed: &[AxisValue]) -> String {
-        let map = fixed.iter().map(|v| (v.axis(), vec![v.clone()])).collect();
-        fixed_axes(&map).into_iter().map(Axis::key).collect::<Vec<_>>().join(",")
-    }
-
     #[test]
-    fn series_fix_the_columns_their_accelerator_makes_irrelevant() {
+    fn settings_that_apply_somewhere_are_not_fixed() {
         let flat = AxisValue::accel(Accel::Ours(AccelKind::FlatBvh));
-        assert_eq!(
-            keys(&[flat, AxisValue::traversal(Some(Traversal::FrontToBack))]),
-            "accel,traversal,obvhs_build,embree_build,embree_isa"
-        );
-        let obvhs = Accel::from_name(crate::names::PeerKind::ObvhsBvh2.name()).unwrap();
-        assert_eq!(
-            keys(&[AxisValue::accel(obvhs)]),
-            "accel,split,leaf_size,sah_bins,traversal,embree_build,embree_isa"
-        );
-        let list = AxisValue::accel(Accel::Ours(AccelKind::List));
-        assert_eq!(
-            keys(&[AxisValue::strategy(StrategyKind::Serial), list]),
-            "accel,split,leaf_size,sah_bins,traversal,strategy,threads,obvhs_build,embree_build,embree_isa"
-        );
+        let fixed = fixed_axes(&BTreeMap::from([(Axis::accel, vec![flat])]));
+        for axis in [Axis::split, Axis::leaf_size, Axis::traversal, Axis::threads, Axis::objects] {
+            assert!(!fixed.contains(&axis), "{axis:?} applies to some flat-BVH configuration");
+        }
+        let serial = AxisValue::strategy(StrategyKind::Serial);
+        assert!(fixed_axes(&BTreeMap::from([(Axis::strategy, vec![serial])])).contains(&Axis::threads));
     }
 }
