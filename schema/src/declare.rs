@@ -91,7 +91,8 @@ macro_rules! declare_columns {
                 use crate::value::AxisType;
                 let range = match self.range() {
                     Some((lo, hi)) if self.is_integer() => format!("{}..={}", lo as i64, hi as i64),
-                    Some((lo, hi)) => format!("{lo}..={hi}"),
+                    // Float settings are f32: their bounds print as the f32 they were declared as.
+                    Some((lo, hi)) => format!("{}..={}", lo as f32, hi as f32),
                     None => String::new(),
                 };
                 let text = match self { $( Axis::$s => <$sty>::allowed(&range), )+ };
