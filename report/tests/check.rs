@@ -138,7 +138,7 @@ fn run_dir(name: &str, runs: Option<&str>) -> PathBuf {
 
 fn spec() -> ReportSpec {
     let fixed: Vec<String> =
-        ["accel", "split", "leaf_size", "sah_bins", "traversal", "strategy", "threads"].map(String::from).to_vec();
+        schema::row::setting_names().into_iter().filter(|c| !["objects", "seed"].contains(c)).map(String::from).collect();
     ReportSpec {
         name: "synthetic".into(),
         reference: Some("brute".into()),

@@ -6,7 +6,7 @@ use std::path::Path;
 use report::spec::ReportSpec;
 
 fn spec() -> ReportSpec {
-    let fixed: Vec<String> = ["accel", "split", "leaf_size", "sah_bins", "traversal", "strategy", "threads"].map(String::from).to_vec();
+    let fixed: Vec<String> = schema::row::setting_names().into_iter().filter(|c| !["objects", "seed"].contains(c)).map(String::from).collect();
     ReportSpec {
         name: "golden".into(),
         reference: Some("serial·list".into()),
