@@ -1,6 +1,7 @@
 //! The declaration: every column of a row, identity first, then the settings (the axes of a sweep), then
 //! the measures. Adding a setting is one entry here (plus the tracer code that uses it).
 
+use tracer::accel::bvh::SahCosts;
 use tracer::accel::{AccelKind, AccelParams, BvhParams, Split, Traversal};
 use tracer::executor::{Strategy, StrategyKind};
 use tracer::scene::SceneKind;
@@ -55,6 +56,12 @@ declare_columns! {
         embree_build: Option<EmbreeQuality> = Some(EmbreeQuality::Medium), applies embree else None;
         /// Instruction set Embree is pinned to (`default`: Embree's choice).
         embree_isa: Option<EmbreeIsa> = Some(EmbreeIsa::Default), applies embree else None;
+        /// SAH cost of visiting a node, relative to a sphere test's cost, that the SAH splits build with.
+        sah_traversal_cost: Option<f32> = Some(SahCosts::UNIT.traversal),
+            range(*BvhParams::SAH_COSTS.start(), *BvhParams::SAH_COSTS.end()), applies sah_split else None, added 2;
+        /// SAH cost of a sphere test that the SAH splits build with.
+        sah_intersection_cost: Option<f32> = Some(SahCosts::UNIT.intersection),
+            range(*BvhParams::SAH_COSTS.start(), *BvhParams::SAH_COSTS.end()), applies sah_split else None, added 2;
     }
     measures {
         /// Wall time of scene generation.
@@ -135,6 +142,11 @@ fn binned_sah(s: &Settings) -> bool {
     tree(s) && s.split == Some(Split::BinnedSah)
 }
 
+/// Only the SAH splits have cost constants.
+fn sah_split(s: &Settings) -> bool {
+    tree(s) && s.split.is_some_and(Split::is_sah)
+}
+
 /// Serial runs use one thread.
 fn parallel(s: &Settings) -> bool {
     s.strategy != StrategyKind::Serial
@@ -168,6 +180,10 @@ impl Settings {
             split: self.split.unwrap_or(default.split),
             sah_bins: self.sah_bins.unwrap_or(default.sah_bins),
             traversal: self.traversal.unwrap_or(default.traversal),
+            sah_costs: SahCosts {
+                traversal: self.sah_traversal_cost.unwrap_or(default.sah_costs.traversal),
+                intersection: self.sah_intersection_cost.unwrap_or(default.sah_costs.intersection),
+            },
         };
         AccelParams { kind, bvh }
     }

@@ -28,7 +28,7 @@ pub fn every_tree() -> Vec<AccelParams> {
         for split in Split::ALL {
             for max_leaf_size in 1..=BvhParams::MAX_LEAF_SIZE {
                 for traversal in Traversal::ALL {
-                    let bvh = BvhParams { max_leaf_size, split, traversal, sah_bins: 16 };
+                    let bvh = BvhParams { max_leaf_size, split, traversal, sah_bins: 16, ..BvhParams::default() };
                     all.push(AccelParams { kind, bvh });
                 }
             }

@@ -106,8 +106,10 @@ impl Builder<'_> {
             match self.params.split {
                 Split::CentroidMidpoint => split::centroid_midpoint::split(&view, prims),
                 Split::ObjectMedian => object_median::split(&view, prims),
-                Split::BinnedSah => binned_sah::split(&view, prims, self.params.sah_bins as usize, &mut self.bins),
-                Split::SweepSah => sweep_sah::split(&view, prims, &mut self.sweep),
+                Split::BinnedSah => {
+                    binned_sah::split(&view, prims, self.params.sah_bins as usize, self.params.sah_costs, &mut self.bins)
+                }
+                Split::SweepSah => sweep_sah::split(&view, prims, self.params.sah_costs, &mut self.sweep),
             }
         };
         let decision = match decision {

@@ -17,5 +17,6 @@ pub mod traverse;
 
 pub use flat::FlatBvh;
 pub use params::{BvhParams, ParamError, Split, Traversal};
+pub use sah::SahCosts;
 pub use pointer::Bvh;
 pub use stats::TreeStats;

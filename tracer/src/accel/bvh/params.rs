@@ -5,6 +5,8 @@ use std::ops::RangeInclusive;
 
 use serde::{Deserialize, Serialize};
 
+use super::sah::SahCosts;
+
 /// How a node's spheres are divided between its two children.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -22,6 +24,11 @@ pub enum Split {
 impl Split {
     /// Every rule, in the order tools list them.
     pub const ALL: [Split; 4] = [Split::CentroidMidpoint, Split::ObjectMedian, Split::BinnedSah, Split::SweepSah];
+
+    /// True for the rules that build with the SAH cost model.
+    pub fn is_sah(self) -> bool {
+        matches!(self, Split::BinnedSah | Split::SweepSah)
+    }
 
     /// The kebab-case name used in configs and on the command line.
     pub fn name(self) -> &'static str {
@@ -69,11 +76,19 @@ pub struct BvhParams {
     pub sah_bins: u32,
     /// The child visiting order.
     pub traversal: Traversal,
+    /// The cost constants the SAH splits build with (ignored by the other splits).
+    pub sah_costs: SahCosts,
 }
 
 impl Default for BvhParams {
     fn default() -> Self {
-        Self { max_leaf_size: 4, split: Split::CentroidMidpoint, sah_bins: 16, traversal: Traversal::Fixed }
+        Self {
+            max_leaf_size: 4,
+            split: Split::CentroidMidpoint,
+            sah_bins: 16,
+            traversal: Traversal::Fixed,
+            sah_costs: SahCosts::UNIT,
+        }
     }
 }
 
@@ -103,6 +118,8 @@ impl BvhParams {
     pub const MAX_LEAF_SIZE: u32 = *Self::LEAF_SIZES.end();
     /// Allowed `sah_bins` values.
     pub const SAH_BINS: RangeInclusive<u32> = 2..=256;
+    /// Allowed SAH cost constants.
+    pub const SAH_COSTS: RangeInclusive<f32> = 1e-3..=1e3;
 
     /// Checks every range; builders refuse invalid parameters.
     pub fn validate(&self) -> Result<(), ParamError> {
@@ -111,6 +128,13 @@ impl BvhParams {
             if range.contains(&value) { Ok(()) } else { Err(ParamError { key, allowed, found: value.to_string() }) }
         };
         check("max_leaf_size", Self::LEAF_SIZES, self.max_leaf_size)?;
-        check("sah_bins", Self::SAH_BINS, self.sah_bins)
+        check("sah_bins", Self::SAH_BINS, self.sah_bins)?;
+        for (key, cost) in [("sah_traversal_cost", self.sah_costs.traversal), ("sah_intersection_cost", self.sah_costs.intersection)] {
+            if !(Self::SAH_COSTS.contains(&cost)) {
+                let allowed = format!("{}..={}", Self::SAH_COSTS.start(), Self::SAH_COSTS.end());
+                return Err(ParamError { key, allowed, found: cost.to_string() });
+            }
+        }
+        Ok(())
     }
 }

@@ -1,21 +1,60 @@
 //! The surface area heuristic's cost model, shared by the SAH splits and the tree statistics.
 //!
-//! Cost of a tree = `TRAVERSAL_COST * Σ_interior SA(n) / SA(root) + INTERSECTION_COST * Σ_leaves
-//! count(l) * SA(l) / SA(root)` (Goldsmith–Salmon, MacDonald–Booth), with both constants 1.
+//! Cost of a tree = `traversal * Σ_interior SA(n) / SA(root) + intersection * Σ_leaves count(l) * SA(l) /
+//! SA(root)` (Goldsmith–Salmon, MacDonald–Booth). The SAH splits build with [`SahCosts`] (a parameter, unit
+//! by default); the trees' reported SAH cost always uses unit costs, so that it compares across builds.
 
-/// Cost of visiting one interior node, relative to one ray-sphere test.
+use std::hash::{Hash, Hasher};
+
+use serde::{Deserialize, Serialize};
+
+/// Cost of visiting one interior node in the reported SAH cost, relative to one ray-sphere test.
 pub const TRAVERSAL_COST: f32 = 1.0;
-/// Cost of one ray-sphere test.
+/// Cost of one ray-sphere test in the reported SAH cost.
 pub const INTERSECTION_COST: f32 = 1.0;
 
-/// Expected cost of making a node of `count` spheres a leaf.
-pub fn leaf_cost(count: usize) -> f32 {
-    INTERSECTION_COST * count as f32
+/// The two constants of the cost model a SAH split builds with (positive and finite).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SahCosts {
+    /// Cost of visiting one interior node.
+    pub traversal: f32,
+    /// Cost of one ray-sphere test.
+    pub intersection: f32,
 }
 
-/// Expected cost of splitting a node of surface area `parent_area` into the two given children.
-pub fn split_cost(parent_area: f32, left_area: f32, left_count: usize, right_area: f32, right_count: usize) -> f32 {
-    let parent_area = if parent_area > 0.0 { parent_area } else { 1.0 };
-    TRAVERSAL_COST
-        + INTERSECTION_COST * (left_area * left_count as f32 + right_area * right_count as f32) / parent_area
+impl SahCosts {
+    /// Both costs 1 (the reported SAH cost's model).
+    pub const UNIT: SahCosts = SahCosts { traversal: TRAVERSAL_COST, intersection: INTERSECTION_COST };
+
+    /// Expected cost of making a node of `count` spheres a leaf.
+    pub fn leaf_cost(&self, count: usize) -> f32 {
+        self.intersection * count as f32
+    }
+
+    /// Expected cost of splitting a node of surface area `parent_area` into the two given children.
+    pub fn split_cost(&self, parent_area: f32, left_area: f32, left_count: usize, right_area: f32, right_count: usize) -> f32 {
+        let parent_area = if parent_area > 0.0 { parent_area } else { 1.0 };
+        self.traversal + self.intersection * (left_area * left_count as f32 + right_area * right_count as f32) / parent_area
+    }
+}
+
+impl Default for SahCosts {
+    fn default() -> Self {
+        SahCosts::UNIT
+    }
+}
+
+// Costs are validated finite, so bitwise equality is equality.
+impl Eq for SahCosts {}
+
+impl Hash for SahCosts {
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        self.traversal.to_bits().hash(state);
+        self.intersection.to_bits().hash(state);
+    }
+}
+
+/// Expected cost of making a node of `count` spheres a leaf, with unit costs.
+pub fn leaf_cost(count: usize) -> f32 {
+    SahCosts::UNIT.leaf_cost(count)
 }

@@ -1,7 +1,7 @@
 //! Binned surface area heuristic (Wald 2007): candidate planes between equal-width centroid bins.
 
 use super::{Decision, NodeView, partition, proper};
-use crate::accel::bvh::sah;
+use crate::accel::bvh::sah::SahCosts;
 use crate::geometry::Aabb;
 
 /// Scratch space kept between nodes so that binning allocates once per build.
@@ -13,7 +13,7 @@ pub struct Bins {
 }
 
 /// Chooses the cheapest plane among `bin_count - 1` per axis, or a leaf when that is cheaper and allowed.
-pub fn split(node: &NodeView<'_>, prims: &mut [u32], bin_count: usize, bins: &mut Bins) -> Decision {
+pub fn split(node: &NodeView<'_>, prims: &mut [u32], bin_count: usize, costs: SahCosts, bins: &mut Bins) -> Decision {
     let cb = node.centroid_bounds;
     let extent = cb.extent();
     let parent_area = node.bounds.surface_area();
@@ -48,7 +48,7 @@ pub fn split(node: &NodeView<'_>, prims: &mut [u32], bin_count: usize, bins: &mu
             if left_count == 0 || right_count == 0 {
                 continue;
             }
-            let cost = sah::split_cost(parent_area, left.surface_area(), left_count, bins.right_area[b], right_count);
+            let cost = costs.split_cost(parent_area, left.surface_area(), left_count, bins.right_area[b], right_count);
             if best.is_none_or(|(c, _, _)| cost < c) {
                 best = Some((cost, axis, b));
             }
@@ -57,7 +57,7 @@ pub fn split(node: &NodeView<'_>, prims: &mut [u32], bin_count: usize, bins: &mu
     let Some((cost, axis, first_right)) = best else {
         return if node.may_be_leaf { Decision::Leaf } else { Decision::NoSplit };
     };
-    if node.may_be_leaf && sah::leaf_cost(prims.len()) <= cost {
+    if node.may_be_leaf && costs.leaf_cost(prims.len()) <= cost {
         return Decision::Leaf;
     }
     let scale = bin_count as f32 / extent[axis];

@@ -1,7 +1,7 @@
 //! Full-sweep surface area heuristic: every split position in centroid order on every axis.
 
 use super::{Decision, NodeView, proper};
-use crate::accel::bvh::sah;
+use crate::accel::bvh::sah::SahCosts;
 use crate::geometry::Aabb;
 
 /// Scratch space kept between nodes.
@@ -18,7 +18,7 @@ fn sort_on_axis(order: &mut [u32], node: &NodeView<'_>, axis: usize) {
 }
 
 /// Chooses the cheapest split position on any axis, or a leaf when that is cheaper and allowed.
-pub fn split(node: &NodeView<'_>, prims: &mut [u32], sweep: &mut Sweep) -> Decision {
+pub fn split(node: &NodeView<'_>, prims: &mut [u32], costs: SahCosts, sweep: &mut Sweep) -> Decision {
     let n = prims.len();
     let parent_area = node.bounds.surface_area();
     let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, left count)
@@ -36,7 +36,7 @@ pub fn split(node: &NodeView<'_>, prims: &mut [u32], sweep: &mut Sweep) -> Decis
         let mut left = Aabb::EMPTY;
         for i in 1..n {
             left = left.union(&node.boxes[sweep.order[i - 1] as usize]);
-            let cost = sah::split_cost(parent_area, left.surface_area(), i, sweep.right_area[i], n - i);
+            let cost = costs.split_cost(parent_area, left.surface_area(), i, sweep.right_area[i], n - i);
             if best.is_none_or(|(c, _, _)| cost < c) {
                 best = Some((cost, axis, i));
             }
@@ -45,7 +45,7 @@ pub fn split(node: &NodeView<'_>, prims: &mut [u32], sweep: &mut Sweep) -> Decis
     let Some((cost, axis, left_count)) = best else {
         return if node.may_be_leaf { Decision::Leaf } else { Decision::NoSplit };
     };
-    if node.may_be_leaf && sah::leaf_cost(n) <= cost {
+    if node.may_be_leaf && costs.leaf_cost(n) <= cost {
         return Decision::Leaf;
     }
     sort_on_axis(prims, node, axis);
