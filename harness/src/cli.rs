@@ -194,7 +194,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = Split::CentroidMidpoint.name(), value_parser = choice(&[("sah", Split::BinnedSah)]))]
     pub split: Split,
     /// Largest leaf (see `harness list`).
-    #[arg(long, default_value_t = BvhParams::default().max_leaf_size, value_parser = clap::value_parser!(u32).range(range(BvhParams::LEAF_SIZES)))]
+    #[arg(long, default_value_t = BvhParams::default().leaf_size, value_parser = clap::value_parser!(u32).range(range(BvhParams::LEAF_SIZES)))]
     pub leaf_size: u32,
     /// Bins per axis for binned SAH.
     #[arg(long, default_value_t = BvhParams::default().sah_bins, value_parser = clap::value_parser!(u32).range(range(BvhParams::SAH_BINS)))]

@@ -54,7 +54,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
     let params = AccelParams {
         kind: args.accel,
         bvh: BvhParams {
-            max_leaf_size: args.leaf_size,
+            leaf_size: args.leaf_size,
             split: args.split,
             sah_bins: args.sah_bins,
             traversal: args.traversal,

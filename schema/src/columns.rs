@@ -31,7 +31,7 @@ declare_columns! {
         /// Split rule of the tracer's trees.
         split: Option<Split> = Some(BvhParams::default().split), applies tree else None;
         /// Largest leaf of the tracer's trees.
-        leaf_size: Option<u32> = Some(BvhParams::default().max_leaf_size),
+        leaf_size: Option<u32> = Some(BvhParams::default().leaf_size),
             range(*BvhParams::LEAF_SIZES.start(), *BvhParams::LEAF_SIZES.end()), applies tree else None, unit "spheres";
         /// Bins per axis of the binned SAH split.
         sah_bins: Option<u32> = Some(BvhParams::default().sah_bins),
@@ -176,7 +176,7 @@ impl Settings {
             Accel::Peer(_) => AccelKind::List,
         };
         let bvh = BvhParams {
-            max_leaf_size: self.leaf_size.unwrap_or(default.max_leaf_size),
+            leaf_size: self.leaf_size.unwrap_or(default.leaf_size),
             split: self.split.unwrap_or(default.split),
             sah_bins: self.sah_bins.unwrap_or(default.sah_bins),
             traversal: self.traversal.unwrap_or(default.traversal),

@@ -7,7 +7,7 @@ use tracer::scene::SceneKind;
 use tracer::testing::{Reference, Tolerance, sphere_ray_mix};
 
 fn params(split: Split, traversal: f32, intersection: f32) -> BvhParams {
-    BvhParams { split, max_leaf_size: 16, sah_costs: SahCosts { traversal, intersection }, ..BvhParams::default() }
+    BvhParams { split, leaf_size: 16, sah_costs: SahCosts { traversal, intersection }, ..BvhParams::default() }
 }
 
 #[test]

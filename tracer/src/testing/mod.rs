@@ -26,9 +26,9 @@ pub fn every_tree() -> Vec<AccelParams> {
     let mut all = Vec::new();
     for kind in [AccelKind::Bvh, AccelKind::FlatBvh] {
         for split in Split::ALL {
-            for max_leaf_size in 1..=BvhParams::MAX_LEAF_SIZE {
+            for leaf_size in 1..=BvhParams::MAX_LEAF_SIZE {
                 for traversal in Traversal::ALL {
-                    let bvh = BvhParams { max_leaf_size, split, traversal, sah_bins: 16, ..BvhParams::default() };
+                    let bvh = BvhParams { leaf_size, split, traversal, sah_bins: 16, ..BvhParams::default() };
                     all.push(AccelParams { kind, bvh });
                 }
             }

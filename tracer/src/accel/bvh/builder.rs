@@ -95,7 +95,7 @@ impl Builder<'_> {
             centroids: &self.centroids,
             bounds,
             centroid_bounds,
-            may_be_leaf: n <= self.params.max_leaf_size as usize,
+            may_be_leaf: n <= self.params.leaf_size as usize,
         };
         let decision = if n <= 1 {
             Decision::Leaf

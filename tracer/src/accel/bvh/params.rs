@@ -69,7 +69,7 @@ impl Traversal {
 #[serde(deny_unknown_fields, default)]
 pub struct BvhParams {
     /// Largest number of spheres in a leaf, in [`BvhParams::LEAF_SIZES`].
-    pub max_leaf_size: u32,
+    pub leaf_size: u32,
     /// The split rule.
     pub split: Split,
     /// Bins per axis for [`Split::BinnedSah`], in [`BvhParams::SAH_BINS`].
@@ -83,7 +83,7 @@ pub struct BvhParams {
 impl Default for BvhParams {
     fn default() -> Self {
         Self {
-            max_leaf_size: 4,
+            leaf_size: 4,
             split: Split::CentroidMidpoint,
             sah_bins: 16,
             traversal: Traversal::Fixed,
@@ -112,9 +112,9 @@ impl fmt::Display for ParamError {
 impl std::error::Error for ParamError {}
 
 impl BvhParams {
-    /// Allowed `max_leaf_size` values.
+    /// Allowed `leaf_size` values.
     pub const LEAF_SIZES: RangeInclusive<u32> = 1..=16;
-    /// Largest allowed `max_leaf_size`.
+    /// Largest allowed `leaf_size`.
     pub const MAX_LEAF_SIZE: u32 = *Self::LEAF_SIZES.end();
     /// Allowed `sah_bins` values.
     pub const SAH_BINS: RangeInclusive<u32> = 2..=256;
@@ -127,7 +127,7 @@ impl BvhParams {
             let allowed = format!("{}..={}", range.start(), range.end());
             if range.contains(&value) { Ok(()) } else { Err(ParamError { key, allowed, found: value.to_string() }) }
         };
-        check("max_leaf_size", Self::LEAF_SIZES, self.max_leaf_size)?;
+        check("leaf_size", Self::LEAF_SIZES, self.leaf_size)?;
         check("sah_bins", Self::SAH_BINS, self.sah_bins)?;
         for (key, cost) in [("sah_traversal_cost", self.sah_costs.traversal), ("sah_intersection_cost", self.sah_costs.intersection)] {
             if !(Self::SAH_COSTS.contains(&cost)) {
