@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 
 use crate::claims::ClaimResult;
 use crate::pool;
-use crate::rows::{Rows, Run, SETTINGS};
+use crate::rows::{POINT, Rows, Run};
 use crate::spec::{ClaimKind, ReportSpec, Verdict};
 use crate::stats;
 
@@ -92,6 +92,7 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
         num(stats::median(&loads)),
         num(load_max)
     );
+    machines(md, runs);
     let _ = writeln!(
         md,
         "- Code: commit {}{}; {}; harness {}",
@@ -113,6 +114,31 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
             "> **Warning:** {over} rows ran with more threads than the machine's logical cores; \
              their times measure oversubscription.\n"
         );
+    }
+}
+
+/// One line per machine that recorded rows (rows recorded before machine identity existed are left out).
+fn machines(md: &mut String, runs: &[Run]) {
+    let mut seen = BTreeSet::new();
+    for r in runs.iter().filter(|r| !r.text("machine_id").is_empty()) {
+        if seen.insert(r.text("machine_id")) {
+            let hypervisor = if r.text("hypervisor") == "true" { ", virtual machine" } else { "" };
+            let _ = writeln!(
+                md,
+                "  - machine `{}`: {} ({} {}), ISA {}, caches {}, kernel {}{hypervisor}; compiled for {}",
+                r.text("machine_id"),
+                r.text("cpu_model"),
+                r.text("cpu_vendor"),
+                r.text("cpu_signature"),
+                r.text("cpu_isa"),
+                r.text("cpu_caches"),
+                r.text("kernel"),
+                if r.text("target_features").is_empty() { "the baseline target" } else { r.text("target_features") }
+            );
+        }
+    }
+    if seen.len() > 1 {
+        let _ = writeln!(md, "  - rows of different machines are never pooled: each machine's runs are their own points");
     }
 }
 
@@ -173,7 +199,7 @@ fn claims_table(md: &mut String, spec: &ReportSpec, claims: &[ClaimResult]) {
 
 fn summary_table(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     let runs = &rows.runs;
-    let varying: Vec<&str> = SETTINGS
+    let varying: Vec<&str> = POINT
         .iter()
         .copied()
         .filter(|c| *c != "seed")

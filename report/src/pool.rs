@@ -1,7 +1,7 @@
 //! Pooling samples: which runs stand for the same point, and which runs of another series they
 //! are compared with (the matching rule shared by speedups, speedup figures and claims).
 
-use crate::rows::{Run, SETTINGS};
+use crate::rows::{POINT, Run};
 use crate::spec::ReportSpec;
 use crate::stats::{self, Estimate};
 
@@ -16,13 +16,13 @@ pub struct Point {
     pub threads: f64,
 }
 
-/// Whether `other` is `run`'s counterpart: equal on every setting column except those the two
-/// runs' series fix (`spec.series_fixed`) and those in `ignore`.
+/// Whether `other` is `run`'s counterpart: equal on every setting column and the machine, except the
+/// settings the two runs' series fix (`spec.series_fixed`) and those in `ignore`.
 pub fn matches(spec: &ReportSpec, run: &Run, other: &Run, ignore: &[&str]) -> bool {
     let fixed = |series: &str, column: &str| {
         spec.series_fixed.get(series).is_some_and(|columns| columns.iter().any(|c| c == column))
     };
-    SETTINGS
+    POINT
         .iter()
         .filter(|column| !ignore.contains(column))
         .filter(|column| !fixed(run.series(), column) && !fixed(other.series(), column))
@@ -81,7 +81,7 @@ pub struct Curve {
 /// Runs without a numeric x are left out.
 pub(crate) fn curves_of<'a>(runs: &'a [Run], series: &str, x: &str) -> Vec<(String, Vec<(f64, Vec<&'a Run>)>)> {
     let own: Vec<&Run> = runs.iter().filter(|r| r.series() == series && r.num(x).is_finite()).collect();
-    let varying: Vec<&str> = SETTINGS
+    let varying: Vec<&str> = POINT
         .iter()
         .copied()
         .filter(|c| *c != "seed" && *c != x)

@@ -14,6 +14,9 @@ use crate::error::Error;
 /// Setting columns (the schema's axes, in row order); a configuration is series + these.
 pub static SETTINGS: std::sync::LazyLock<Vec<&'static str>> = std::sync::LazyLock::new(schema::row::setting_names);
 
+/// The settings and `machine_id`: runs equal on these stand for one point (`schema::row::point_names`).
+pub static POINT: std::sync::LazyLock<Vec<&'static str>> = std::sync::LazyLock::new(schema::row::point_names);
+
 /// Index of each column in `schema::row::COLUMNS`.
 fn index_of(column: &str) -> Option<usize> {
     static INDEX: OnceLock<HashMap<&'static str, usize>> = OnceLock::new();

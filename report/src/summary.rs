@@ -31,11 +31,19 @@ pub fn summarise(rows: &Rows, spec: &ReportSpec) -> PolarsResult<DataFrame> {
         aggs.push(col(metric).max().alias(format!("{metric}_max")));
     }
     aggs.extend(deterministic().into_iter().map(|c| col(c).first()));
-    let mut frame = rows.frame.clone().lazy().group_by_stable([col("config_id")]).agg(aggs).collect()?;
+    // One row per configuration and machine: timings of different machines are never pooled.
+    let keys = [col("config_id"), col("machine_id")];
+    let mut frame = rows.frame.clone().lazy().group_by_stable(keys).agg(aggs).collect()?;
 
-    let ids: Vec<String> = frame.column("config_id")?.str()?.iter().map(|id| id.unwrap_or("").to_string()).collect();
-    let groups: Vec<Vec<&Run>> =
-        ids.iter().map(|id| rows.runs.iter().filter(|run| run.config_id() == id).collect()).collect();
+    let text = |name: &str| -> PolarsResult<Vec<String>> {
+        Ok(frame.column(name)?.str()?.iter().map(|v| v.unwrap_or("").to_string()).collect())
+    };
+    let (ids, machines) = (text("config_id")?, text("machine_id")?);
+    let groups: Vec<Vec<&Run>> = ids
+        .iter()
+        .zip(&machines)
+        .map(|(id, m)| rows.runs.iter().filter(|run| run.config_id() == id && run.text("machine_id") == m).collect())
+        .collect();
 
     for metric in METRICS {
         let intervals: Vec<stats::Estimate> = ids
@@ -66,7 +74,7 @@ pub fn summarise(rows: &Rows, spec: &ReportSpec) -> PolarsResult<DataFrame> {
 /// The summary's columns in output order.
 fn column_order() -> Vec<String> {
     let mut names: Vec<String> =
-        ["config_id", "experiment", "series"].iter().chain(SETTINGS.iter()).map(|c| c.to_string()).collect();
+        ["config_id", "machine_id", "experiment", "series"].iter().chain(SETTINGS.iter()).map(|c| c.to_string()).collect();
     names.push("n".into());
     for metric in METRICS {
         names.extend(STATS.iter().map(|stat| format!("{metric}_{stat}")));

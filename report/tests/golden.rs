@@ -268,3 +268,36 @@ fn failed_validation_is_excluded_and_announced_and_filters_narrow_plots() {
     std::fs::remove_dir_all(&dir).unwrap();
     std::fs::remove_dir_all(&unfiltered).unwrap();
 }
+
+#[test]
+fn rows_of_two_machines_are_never_pooled() {
+    // The golden rows recorded again on a second, 2x slower machine: same configurations, other machine_id.
+    let golden = golden_rows();
+    let mut lines = golden.lines();
+    let mut text = format!("{},machine_id\n", lines.next().unwrap());
+    let mut slow = String::new();
+    for line in lines {
+        text.push_str(&format!("{line},aaaaaaaaaaaa\n"));
+        let fields: Vec<String> = line.split(',').map(String::from).collect();
+        // Columns 18..=22 are scene_s, build_s, trace_s, encode_s and total_s (see tests/data/runs.csv).
+        let doubled: Vec<String> = fields
+            .iter()
+            .enumerate()
+            .map(|(i, f)| if (18..=22).contains(&i) { (f.parse::<f64>().unwrap() * 2.0).to_string() } else { f.clone() })
+            .collect();
+        slow.push_str(&format!("{},bbbbbbbbbbbb\n", doubled.join(",")));
+    }
+    text.push_str(&slow);
+    let dir = run_dir("machines", &text);
+    report::write(&dir, &spec()).unwrap();
+    let summary = std::fs::read_to_string(dir.join("summary.csv")).unwrap();
+    assert_eq!(summary.lines().count(), 1 + 2 * 8, "one summary row per configuration and machine");
+    let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
+    assert!(md.contains("machine `aaaaaaaaaaaa`") && md.contains("machine `bbbbbbbbbbbb`"), "{md}");
+    // Speedups are taken within each machine, so both machines give the same speedup at every point.
+    let speedups: Vec<&str> =
+        md.lines().filter(|l| l.starts_with("| serial·bvh |")).map(|l| l.rsplit(" | ").nth(1).unwrap()).collect();
+    assert_eq!(speedups.len(), 4, "2 object counts x 2 machines: {md}");
+    assert_eq!(speedups[0].split(' ').next(), speedups[2].split(' ').next(), "{speedups:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -122,6 +122,23 @@ declare_columns! {
         mismatches: u64, Validation;
         /// Peer library facts (`-` for the tracer's structures).
         peer_info: String, Provenance = "-".to_string();
+        /// CPU vendor as the kernel reports it (`vendor_id`).
+        cpu_vendor: String, Provenance, added 2;
+        /// CPU family, model and stepping numbers, `family/model/stepping`.
+        cpu_signature: String, Provenance, added 2;
+        /// The instruction-set extensions that matter here that the CPU has (of sse4.2, avx, avx2, fma, avx512f/bw/dq/vl).
+        cpu_isa: String, Provenance, added 2;
+        /// Cache sizes, e.g. `L1d 32K L1i 32K L2 1024K L3 32768K`.
+        cpu_caches: String, Provenance, added 2;
+        /// True when the kernel reports a hypervisor (a virtual machine).
+        hypervisor: bool, Provenance, added 2;
+        /// Kernel release.
+        kernel: String, Provenance, added 2;
+        /// The target features the harness was compiled with (of the same list as `cpu_isa`).
+        target_features: String, Provenance, added 2;
+        /// 12 hex digits identifying the machine: a hash of every column from `cpu_model` to here, cores and rustc.
+        /// Rows of different machines are never pooled into one point (empty: recorded before this column).
+        machine_id: String, Provenance, added 2;
     }
 }
 

@@ -19,7 +19,8 @@ pub(crate) use or_default;
 /// configuration (where it does not, normalization sets it to VALUE, so it never multiplies runs);
 /// `added N` marks settings added in row format N (after the first), which join the configuration id only when
 /// they differ from their default, so that existing configurations keep their ids.
-/// A measure reads `key: Type, Role [= default] [, unit "u"] [, decimals N];`.
+/// A measure reads `key: Type, Role [= default] [, unit "u"] [, decimals N] [, added N];` (`added`: rows recorded
+/// before format N lack the column and read as its default).
 macro_rules! declare_columns {
     (
         identity {
@@ -38,7 +39,8 @@ macro_rules! declare_columns {
                $m:ident : $mty:ty, $role:ident
                $(= $mdef:expr)?
                $(, unit $munit:literal)?
-               $(, decimals $dec:literal)? ; )+
+               $(, decimals $dec:literal)?
+               $(, added $madded:literal)? ; )+
         }
     ) => {
         /// Every setting of one configuration, typed (see the declaration for each one's meaning).
@@ -286,6 +288,7 @@ macro_rules! declare_columns {
                 kind: <$ity as crate::row::MeasureType>::KIND,
                 role: crate::row::Role::Identity,
                 unit: "",
+                added: 1,
                 doc: concat!($($idoc),+),
             }, )+
             $( crate::row::Column {
@@ -293,6 +296,7 @@ macro_rules! declare_columns {
                 kind: <$sty as crate::value::AxisType>::KIND,
                 role: crate::row::Role::Setting,
                 unit: crate::declare::or_default!($( $sunit )?; ""),
+                added: crate::declare::or_default!($( $added )?; 1),
                 doc: concat!($($sdoc),+),
             }, )+
             $( crate::row::Column {
@@ -300,6 +304,7 @@ macro_rules! declare_columns {
                 kind: <$mty as crate::row::MeasureType>::KIND,
                 role: crate::row::Role::$role,
                 unit: crate::declare::or_default!($( $munit )?; ""),
+                added: crate::declare::or_default!($( $madded )?; 1),
                 doc: concat!($($mdoc),+),
             }, )+
         ];

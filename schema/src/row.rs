@@ -51,6 +51,8 @@ pub struct Column {
     pub unit: &'static str,
     /// Meaning, one line.
     pub doc: &'static str,
+    /// The row format the column was added in (1: the first); older files lack it and read as its default.
+    pub added: u32,
 }
 
 impl Column {
@@ -89,11 +91,19 @@ pub fn plottable_names() -> Vec<&'static str> {
         .collect()
 }
 
-/// The key of a seed pool: series plus every setting except `seed` (runs that differ only in the seed
-/// stand for the same point).
-pub fn pool_key(series: &str, setting_text: impl Fn(&str) -> String) -> Vec<String> {
+/// The columns that must be equal for two runs of one series to stand for the same configuration on the
+/// same machine: every setting, and `machine_id` (timings of different machines are never pooled).
+pub fn point_names() -> Vec<&'static str> {
+    let mut names = setting_names();
+    names.push("machine_id");
+    names
+}
+
+/// The key of a seed pool: series plus every [`point_names`] column except `seed` (runs that differ only in
+/// the seed stand for the same point).
+pub fn pool_key(series: &str, text: impl Fn(&str) -> String) -> Vec<String> {
     let mut key = vec![series.to_string()];
-    key.extend(setting_names().into_iter().filter(|c| *c != "seed").map(setting_text));
+    key.extend(point_names().into_iter().filter(|c| *c != "seed").map(text));
     key
 }
 
@@ -227,14 +237,13 @@ impl fmt::Display for ReadError {
 }
 
 /// Reads every row of a `runs.csv` text. Columns are matched by name: columns this version does not know
-/// are ignored, and settings added after a file was recorded (`added` in the declaration) take their
-/// default, normalized; every other column must be there.
+/// are ignored, and columns added after a file was recorded (`added` in the declaration) take their default
+/// (settings normalized); every other column must be there.
 pub fn read_rows(text: &str) -> Result<Vec<Row>, ReadError> {
     let mut reader = csv::ReaderBuilder::new().has_headers(true).from_reader(text.as_bytes());
     let error = |line, message: String| ReadError { line, missing_column: None, message };
     let header = reader.headers().map_err(|e| error(Some(1), e.to_string()))?.clone();
-    let optional = |c: &Column| crate::columns::Axis::from_key(c.name).is_some_and(|a| a.added());
-    if let Some(c) = COLUMNS.iter().find(|c| !optional(c) && !header.iter().any(|h| h == c.name)) {
+    if let Some(c) = COLUMNS.iter().find(|c| c.added <= 1 && !header.iter().any(|h| h == c.name)) {
         return Err(ReadError {
             missing_column: Some(c.name),
             ..error(Some(1), format!("missing column {:?}", c.name))

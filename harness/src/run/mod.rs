@@ -138,6 +138,15 @@ fn row(
     row.validated_against = v.reference.to_string();
     row.mismatches = v.mismatches as u64;
     row.peer_info = t.peer_info.clone();
+    let m = &p.machine;
+    row.cpu_vendor = m.cpu_vendor.clone();
+    row.cpu_signature = m.cpu_signature.clone();
+    row.cpu_isa = m.cpu_isa.clone();
+    row.cpu_caches = m.cpu_caches.clone();
+    row.hypervisor = m.hypervisor;
+    row.kernel = m.kernel.clone();
+    row.target_features = m.target_features.clone();
+    row.machine_id = m.machine_id.clone();
     row.rounded()
 }
 

@@ -12,6 +12,110 @@ pub struct Provenance {
     pub cpu_model: String,
     pub logical_cores: usize,
     pub harness_version: String,
+    pub machine: Machine,
+}
+
+/// The instruction-set extensions rows report, as `/proc/cpuinfo` flags and as Rust target features.
+const ISA: [(&str, &str); 8] = [
+    ("sse4_2", "sse4.2"),
+    ("avx", "avx"),
+    ("avx2", "avx2"),
+    ("fma", "fma"),
+    ("avx512f", "avx512f"),
+    ("avx512bw", "avx512bw"),
+    ("avx512dq", "avx512dq"),
+    ("avx512vl", "avx512vl"),
+];
+
+/// What tells two machines of one kind apart (see the `cpu_vendor` … `machine_id` columns).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Machine {
+    pub cpu_vendor: String,
+    /// `family/model/stepping`.
+    pub cpu_signature: String,
+    pub cpu_isa: String,
+    pub cpu_caches: String,
+    pub hypervisor: bool,
+    pub kernel: String,
+    pub target_features: String,
+    pub machine_id: String,
+}
+
+impl Machine {
+    /// Reads this machine (Linux: `/proc/cpuinfo`, the cpu0 cache folders, the kernel release).
+    pub fn collect(cpu_model: &str, logical_cores: usize, rustc: &str) -> Machine {
+        let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
+        let mut caches = Vec::new();
+        for index in 0..8 {
+            let dir = format!("/sys/devices/system/cpu/cpu0/cache/index{index}");
+            let read = |f: &str| std::fs::read_to_string(format!("{dir}/{f}")).map(|s| s.trim().to_string());
+            let (Ok(level), Ok(kind), Ok(size)) = (read("level"), read("type"), read("size")) else { break };
+            let suffix = match kind.as_str() {
+                "Data" => "d",
+                "Instruction" => "i",
+                _ => "",
+            };
+            caches.push(format!("L{level}{suffix} {size}"));
+        }
+        let kernel = std::fs::read_to_string("/proc/sys/kernel/osrelease").unwrap_or_default().trim().to_string();
+        let compiled: Vec<&str> = ISA.iter().filter(|(_, feature)| compiled_with(feature)).map(|(_, f)| *f).collect();
+        Machine::from_facts(&cpuinfo, &caches.join(" "), &kernel, &compiled.join(" "), cpu_model, logical_cores, rustc)
+    }
+
+    /// The machine of these facts (`cpuinfo`: the text of `/proc/cpuinfo`); `machine_id` hashes them all.
+    pub fn from_facts(
+        cpuinfo: &str,
+        caches: &str,
+        kernel: &str,
+        target_features: &str,
+        cpu_model: &str,
+        logical_cores: usize,
+        rustc: &str,
+    ) -> Machine {
+        let field = |name: &str| {
+            cpuinfo
+                .lines()
+                .take_while(|l| !l.trim().is_empty())
+                .find(|l| l.split(':').next().is_some_and(|k| k.trim() == name))
+                .and_then(|l| l.split_once(':'))
+                .map_or(String::new(), |(_, v)| v.trim().to_string())
+        };
+        let flags = field("flags");
+        let flags: Vec<&str> = flags.split_whitespace().collect();
+        let isa: Vec<&str> = ISA.iter().filter(|(flag, _)| flags.contains(flag)).map(|(_, name)| *name).collect();
+        let mut m = Machine {
+            cpu_vendor: field("vendor_id"),
+            cpu_signature: format!("{}/{}/{}", field("cpu family"), field("model"), field("stepping")),
+            cpu_isa: isa.join(" "),
+            cpu_caches: caches.to_string(),
+            hypervisor: flags.contains(&"hypervisor"),
+            kernel: kernel.to_string(),
+            target_features: target_features.to_string(),
+            machine_id: String::new(),
+        };
+        let mut h = tracer::fingerprint::Fnv64::default();
+        for part in [cpu_model, &m.cpu_vendor, &m.cpu_signature, &m.cpu_isa, &m.cpu_caches, &m.kernel, &m.target_features, rustc] {
+            h.bytes(part.as_bytes()).bytes(b"\x1f");
+        }
+        h.bytes(&[m.hypervisor as u8]).bytes(&(logical_cores as u64).to_le_bytes());
+        m.machine_id = format!("{:012x}", h.finish() >> 16);
+        m
+    }
+}
+
+/// Whether this binary was compiled with the target feature `feature` (of [`ISA`]).
+fn compiled_with(feature: &str) -> bool {
+    match feature {
+        "sse4.2" => cfg!(target_feature = "sse4.2"),
+        "avx" => cfg!(target_feature = "avx"),
+        "avx2" => cfg!(target_feature = "avx2"),
+        "fma" => cfg!(target_feature = "fma"),
+        "avx512f" => cfg!(target_feature = "avx512f"),
+        "avx512bw" => cfg!(target_feature = "avx512bw"),
+        "avx512dq" => cfg!(target_feature = "avx512dq"),
+        "avx512vl" => cfg!(target_feature = "avx512vl"),
+        _ => false,
+    }
 }
 
 fn git(args: &[&str]) -> Option<String> {
@@ -35,12 +139,14 @@ impl Provenance {
         // Dirty means the code differs from the commit: recorded results (rewritten by every run) do not count.
         let git_dirty = git(&["status", "--porcelain", "--untracked-files=no", "--", ".", ":(exclude)results"])
             .is_some_and(|s| !s.is_empty());
+        let (rustc, logical_cores) = (env!("BVHLAB_RUSTC_VERSION").to_string(), std::thread::available_parallelism().map_or(1, |n| n.get()));
         Provenance {
             git_commit,
             git_dirty,
-            rustc: env!("BVHLAB_RUSTC_VERSION").to_string(),
+            machine: Machine::collect(&cpu_model, logical_cores, &rustc),
+            rustc,
             cpu_model,
-            logical_cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            logical_cores,
             harness_version: env!("CARGO_PKG_VERSION").to_string(),
         }
     }
@@ -73,6 +179,27 @@ pub fn timestamp_now() -> String {
 
 #[cfg(test)]
 mod tests {
+    use super::Machine;
+
+    const AVX2: &str = "processor\t: 0\nvendor_id\t: AuthenticAMD\ncpu family\t: 25\nmodel\t\t: 1\nmodel name\t: AMD EPYC\n\
+                        stepping\t: 1\nflags\t\t: fpu sse4_1 sse4_2 avx fma avx2 hypervisor\n\nprocessor\t: 1\n";
+
+    #[test]
+    fn machines_are_told_apart_by_isa_caches_and_kernel() {
+        let m = Machine::from_facts(AVX2, "L1d 32K L2 512K", "6.1.0", "", "AMD EPYC", 2, "rustc 1.95.0");
+        assert_eq!((m.cpu_vendor.as_str(), m.cpu_signature.as_str()), ("AuthenticAMD", "25/1/1"));
+        assert_eq!(m.cpu_isa, "sse4.2 avx avx2 fma");
+        assert!(m.hypervisor);
+        assert_eq!(m.machine_id.len(), 12);
+        let avx512 = AVX2.replace("avx2 hypervisor", "avx2 avx512f avx512bw avx512dq avx512vl hypervisor");
+        let other = Machine::from_facts(&avx512, "L1d 32K L2 512K", "6.1.0", "", "AMD EPYC", 2, "rustc 1.95.0");
+        assert_eq!(other.cpu_isa, "sse4.2 avx avx2 fma avx512f avx512bw avx512dq avx512vl");
+        assert_ne!(other.machine_id, m.machine_id, "same model name, another ISA");
+        assert_ne!(Machine::from_facts(AVX2, "L1d 32K L2 1024K", "6.1.0", "", "AMD EPYC", 2, "rustc 1.95.0").machine_id, m.machine_id);
+        assert_ne!(Machine::from_facts(AVX2, "L1d 32K L2 512K", "6.1.0", "", "AMD EPYC", 4, "rustc 1.95.0").machine_id, m.machine_id);
+        assert_eq!(Machine::from_facts(AVX2, "L1d 32K L2 512K", "6.1.0", "", "AMD EPYC", 2, "rustc 1.95.0"), m, "deterministic");
+    }
+
     #[test]
     fn timestamp_has_rfc3339_shape() {
         let t = super::timestamp_now();
