@@ -112,9 +112,19 @@ fn no_points(claim: &ClaimSpec, series: &str, than: &str) -> ClaimResult {
 fn judge(kind: &ClaimKind, point: &Point) -> Judged {
     match *kind {
         ClaimKind::Faster { factor, per_thread, .. } => {
-            judge_faster(point.estimate, if per_thread { factor * point.threads } else { factor })
+            judge_faster(point.estimate, if per_thread { factor * thread_ratio(point) } else { factor })
         }
         ClaimKind::Within { tolerance, .. } => judge_within(point.estimate, tolerance),
+    }
+}
+
+/// How many times more threads the series used than the side it is compared with (its own count when the
+/// other side's is unknown).
+fn thread_ratio(point: &Point) -> f64 {
+    if point.reference_threads.is_finite() && point.reference_threads > 0.0 {
+        point.threads / point.reference_threads
+    } else {
+        point.threads
     }
 }
 
@@ -188,5 +198,24 @@ fn objects_range(claim: &ClaimSpec) -> String {
         (Some(min), None) => format!(" with at least {min} objects"),
         (None, Some(max)) => format!(" with at most {max} objects"),
         (Some(min), Some(max)) => format!(" with {min} to {max} objects"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(lo: f64, hi: f64, threads: f64, reference_threads: f64) -> Point {
+        Point { x: 1.0, estimate: Estimate { value: (lo + hi) / 2.0, lo, hi }, threads, reference_threads }
+    }
+
+    #[test]
+    fn per_thread_thresholds_use_the_ratio_of_both_sides_thread_counts() {
+        let kind = ClaimKind::Faster { series: "a".into(), than: "b".into(), factor: 0.5, per_thread: true };
+        // 8 threads against 4: the speedup must reach 0.5 × 2 = 1, not 0.5 × 8 = 4.
+        assert_eq!(judge(&kind, &point(1.1, 1.3, 8.0, 4.0)).verdict, Verdict::Holds);
+        assert_eq!(judge(&kind, &point(0.7, 0.9, 8.0, 4.0)).verdict, Verdict::Fails);
+        assert_eq!(judge(&kind, &point(1.1, 1.3, 8.0, 1.0)).verdict, Verdict::Fails, "against one thread: 4");
+        assert_eq!(judge(&kind, &point(1.1, 1.3, 2.0, f64::NAN)).verdict, Verdict::Holds, "other side unknown: 0.5 × 2");
     }
 }

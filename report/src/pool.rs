@@ -14,6 +14,8 @@ pub struct Point {
     pub estimate: Estimate,
     /// Largest `threads` among the point's runs of the series itself.
     pub threads: f64,
+    /// Largest `threads` among the runs the series is compared with (ratio curves; NaN for metric curves).
+    pub reference_threads: f64,
 }
 
 /// Whether `other` is `run`'s counterpart: equal on every setting column and the machine, except the
@@ -114,12 +116,13 @@ fn max_threads(group: &[&Run]) -> f64 {
     group.iter().map(|run| run.num("threads")).fold(f64::NAN, f64::max)
 }
 
-/// The curves of `series` against `x`, each point estimated by `estimate(fixed, x value, runs there)`.
+/// The curves of `series` against `x`, each point estimated by `estimate(fixed, x value, runs there)`, which
+/// also gives the reference side's largest thread count.
 fn curves_with(
     runs: &[Run],
     series: &str,
     x: &str,
-    estimate: impl Fn(&str, f64, &[&Run]) -> Option<stats::Estimate>,
+    estimate: impl Fn(&str, f64, &[&Run]) -> Option<(stats::Estimate, f64)>,
 ) -> Vec<Curve> {
     curves_of(runs, series, x)
         .into_iter()
@@ -127,8 +130,8 @@ fn curves_with(
             let points = groups
                 .into_iter()
                 .filter_map(|(xv, group)| {
-                    let estimate = estimate(&fixed, xv, &group)?;
-                    Some(Point { x: xv, estimate, threads: max_threads(&group) })
+                    let (estimate, reference_threads) = estimate(&fixed, xv, &group)?;
+                    Some(Point { x: xv, estimate, threads: max_threads(&group), reference_threads })
                 })
                 .collect();
             Curve { fixed, points }
@@ -141,7 +144,7 @@ pub fn metric_curves(runs: &[Run], series: &str, x: &str, metric: &str) -> Vec<C
     curves_with(runs, series, x, |fixed, xv, group| {
         let values = samples(group.iter().copied(), metric);
         let key = format!("{series}|{fixed}|{x}={xv}|{metric}");
-        (!values.is_empty()).then(|| stats::median_ci(&values, stats::seed_for(&key)))
+        (!values.is_empty()).then(|| (stats::median_ci(&values, stats::seed_for(&key)), f64::NAN))
     })
 }
 
@@ -150,7 +153,8 @@ pub fn metric_curves(runs: &[Run], series: &str, x: &str, metric: &str) -> Vec<C
 pub fn ratio_curves(spec: &ReportSpec, runs: &[Run], other: &str, series: &str, x: &str, metric: &str) -> Vec<Curve> {
     curves_with(runs, series, x, |fixed, xv, group| {
         let key = format!("{other}/{series}|{fixed}|{x}={xv}|{metric}");
-        ratio_against(spec, runs, other, group, metric, &["seed"], &key)
+        let estimate = ratio_against(spec, runs, other, group, metric, &["seed"], &key)?;
+        Some((estimate, max_threads(&counterparts(spec, runs, other, group, &["seed"]))))
     })
 }
 
