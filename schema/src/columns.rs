@@ -64,20 +64,20 @@ declare_columns! {
             range(*BvhParams::SAH_COSTS.start(), *BvhParams::SAH_COSTS.end()), applies sah_split else None, added 2;
     }
     measures {
-        /// Wall time of scene generation.
-        scene_s: f64, Metric, unit "s", decimals 9;
-        /// Wall time of building the structure.
-        build_s: f64, Metric, unit "s", decimals 9;
-        /// Wall time of tracing (rendering without encoding, or the ray set).
-        trace_s: f64, Metric, unit "s", decimals 9;
-        /// Wall time of PNG encoding (0 for ray sets).
-        encode_s: f64, Metric, unit "s", decimals 9;
-        /// Sum of the phases.
-        total_s: f64, Metric, unit "s", decimals 9;
+        /// Wall time of scene generation; empty where validation failed (never timed).
+        scene_s: Option<f64>, Metric, unit "s", decimals 9;
+        /// Wall time of building the structure; empty where validation failed (never timed).
+        build_s: Option<f64>, Metric, unit "s", decimals 9;
+        /// Wall time of tracing (rendering without encoding, or the ray set); empty where validation failed (never timed).
+        trace_s: Option<f64>, Metric, unit "s", decimals 9;
+        /// Wall time of PNG encoding (0 for ray sets); empty where validation failed (never timed).
+        encode_s: Option<f64>, Metric, unit "s", decimals 9;
+        /// Sum of the phases; empty where validation failed (never timed).
+        total_s: Option<f64>, Metric, unit "s", decimals 9;
         /// Rays traced (from the counted pass).
         rays: u64, Counter, unit "rays";
-        /// Rays / trace_s / 1e6.
-        mrays_per_s: f64, Metric, unit "Mrays/s", decimals 6;
+        /// Rays / trace_s / 1e6; empty where validation failed.
+        mrays_per_s: Option<f64>, Metric, unit "Mrays/s", decimals 6;
         /// Nodes visited per ray (counted pass).
         nodes_per_ray: f64, Counter, decimals 6;
         /// Ray-box tests per ray (counted pass).

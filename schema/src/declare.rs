@@ -264,7 +264,7 @@ macro_rules! declare_columns {
 
             /// Rounds every measure with declared decimals (so rows stay short and counters compare exactly).
             pub fn rounded(mut self) -> Row {
-                $( $( self.$m = crate::row::round(self.$m, $dec); )? )+
+                $( $( self.$m = crate::row::Round::round_to(self.$m, $dec); )? )+
                 self
             }
 

@@ -171,6 +171,13 @@ impl MeasureType for f64 {
     }
 }
 
+impl MeasureType for Option<f64> {
+    const KIND: Kind = Kind::Float;
+    fn cell(&self) -> Cell {
+        Cell::Float(self.unwrap_or(f64::NAN))
+    }
+}
+
 macro_rules! integer_measure {
     ($($t:ty),*) => {$(
         impl MeasureType for $t {
@@ -184,12 +191,22 @@ macro_rules! integer_measure {
 
 integer_measure!(u32, u64, usize);
 
-/// `x` rounded to `decimals` decimal places (non-finite values unchanged).
-pub fn round(x: f64, decimals: i32) -> f64 {
-    if !x.is_finite() {
-        return x;
+/// A float measure rounded to a number of decimal places (non-finite and absent values unchanged).
+pub trait Round {
+    /// The value rounded to `decimals` places.
+    fn round_to(self, decimals: usize) -> Self;
+}
+
+impl Round for f64 {
+    fn round_to(self, decimals: usize) -> f64 {
+        if self.is_finite() { format!("{self:.decimals$}").parse().unwrap_or(self) } else { self }
     }
-    format!("{x:.*}", decimals as usize).parse().unwrap_or(x)
+}
+
+impl Round for Option<f64> {
+    fn round_to(self, decimals: usize) -> Option<f64> {
+        self.map(|x| x.round_to(decimals))
+    }
 }
 
 /// The stable id of a configuration: 16 hex digits of FNV-1a over the series label and the setting cells

@@ -30,6 +30,21 @@ pub struct Timing {
 }
 
 impl Timing {
+    /// The timing of a configuration that was never timed (it failed validation): every phase NaN.
+    pub fn untimed(output_hash: u64) -> Timing {
+        let nan = f64::NAN;
+        Timing {
+            scene_s: nan,
+            build_s: nan,
+            trace_s: nan,
+            encode_s: nan,
+            output_hash,
+            scene_fingerprint: 0,
+            stats: Default::default(),
+            peer_info: "-".into(),
+        }
+    }
+
     /// Sum of the phases.
     pub fn total_s(&self) -> f64 {
         self.scene_s + self.build_s + self.trace_s + self.encode_s

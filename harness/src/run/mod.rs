@@ -109,13 +109,15 @@ fn row(
     row.config_id = c.id.clone();
     row.series = c.series.clone();
     row.repetition = rep;
-    row.scene_s = t.scene_s;
-    row.build_s = t.build_s;
-    row.trace_s = t.trace_s;
-    row.encode_s = t.encode_s;
-    row.total_s = t.total_s();
+    // A configuration that failed validation is never timed: its metrics stay empty.
+    let metric = |x: f64| x.is_finite().then_some(x);
+    row.scene_s = metric(t.scene_s);
+    row.build_s = metric(t.build_s);
+    row.trace_s = metric(t.trace_s);
+    row.encode_s = metric(t.encode_s);
+    row.total_s = metric(t.total_s());
     row.rays = w.rays;
-    row.mrays_per_s = w.rays as f64 / t.trace_s.max(1e-12) / 1e6;
+    row.mrays_per_s = metric(t.trace_s).map(|trace_s| w.rays as f64 / trace_s.max(1e-12) / 1e6);
     row.nodes_per_ray = nodes;
     row.box_tests_per_ray = boxes;
     row.prim_tests_per_ray = prims;
@@ -236,4 +238,24 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<
     }
     progress.finish();
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn failed_rows_leave_every_metric_empty() {
+        let exp = Experiment::parse(Path::new("t.toml"), "name = \"t\"\n[sweep]\nworkload = \"primary\"\n").unwrap();
+        let plan = Plan::new(&exp, 2).unwrap();
+        let counters = WorkCounters { rays: 786_432, ..Default::default() };
+        let v = Checked { counters, output_hash: 1, reference: "reference", mismatches: 3, rays: 786_432 };
+        let row =
+            row(&exp, &plan.configurations[0], 0, &Timing::untimed(1), &v, &Provenance::collect(), 0.5, "t".into());
+        assert_eq!((row.validation.as_str(), row.mismatches), ("FAILED", 3));
+        let text = format!("{}\n{}", schema::row::header(), schema::row::csv_line(&row).unwrap());
+        let back = &schema::row::read_rows(&text).unwrap()[0];
+        let metrics = [back.scene_s, back.build_s, back.trace_s, back.encode_s, back.total_s, back.mrays_per_s];
+        assert!(metrics.iter().all(Option::is_none), "{metrics:?} in {text}");
+    }
 }

@@ -94,7 +94,16 @@ impl Machine {
             machine_id: String::new(),
         };
         let mut h = tracer::fingerprint::Fnv64::default();
-        for part in [cpu_model, &m.cpu_vendor, &m.cpu_signature, &m.cpu_isa, &m.cpu_caches, &m.kernel, &m.target_features, rustc] {
+        for part in [
+            cpu_model,
+            &m.cpu_vendor,
+            &m.cpu_signature,
+            &m.cpu_isa,
+            &m.cpu_caches,
+            &m.kernel,
+            &m.target_features,
+            rustc,
+        ] {
             h.bytes(part.as_bytes()).bytes(b"\x1f");
         }
         h.bytes(&[m.hypervisor as u8]).bytes(&(logical_cores as u64).to_le_bytes());
@@ -139,7 +148,8 @@ impl Provenance {
         // Dirty means the code differs from the commit: recorded results (rewritten by every run) do not count.
         let git_dirty = git(&["status", "--porcelain", "--untracked-files=no", "--", ".", ":(exclude)results"])
             .is_some_and(|s| !s.is_empty());
-        let (rustc, logical_cores) = (env!("BVHLAB_RUSTC_VERSION").to_string(), std::thread::available_parallelism().map_or(1, |n| n.get()));
+        let (rustc, logical_cores) =
+            (env!("BVHLAB_RUSTC_VERSION").to_string(), std::thread::available_parallelism().map_or(1, |n| n.get()));
         Provenance {
             git_commit,
             git_dirty,
@@ -195,9 +205,19 @@ mod tests {
         let other = Machine::from_facts(&avx512, "L1d 32K L2 512K", "6.1.0", "", "AMD EPYC", 2, "rustc 1.95.0");
         assert_eq!(other.cpu_isa, "sse4.2 avx avx2 fma avx512f avx512bw avx512dq avx512vl");
         assert_ne!(other.machine_id, m.machine_id, "same model name, another ISA");
-        assert_ne!(Machine::from_facts(AVX2, "L1d 32K L2 1024K", "6.1.0", "", "AMD EPYC", 2, "rustc 1.95.0").machine_id, m.machine_id);
-        assert_ne!(Machine::from_facts(AVX2, "L1d 32K L2 512K", "6.1.0", "", "AMD EPYC", 4, "rustc 1.95.0").machine_id, m.machine_id);
-        assert_eq!(Machine::from_facts(AVX2, "L1d 32K L2 512K", "6.1.0", "", "AMD EPYC", 2, "rustc 1.95.0"), m, "deterministic");
+        assert_ne!(
+            Machine::from_facts(AVX2, "L1d 32K L2 1024K", "6.1.0", "", "AMD EPYC", 2, "rustc 1.95.0").machine_id,
+            m.machine_id
+        );
+        assert_ne!(
+            Machine::from_facts(AVX2, "L1d 32K L2 512K", "6.1.0", "", "AMD EPYC", 4, "rustc 1.95.0").machine_id,
+            m.machine_id
+        );
+        assert_eq!(
+            Machine::from_facts(AVX2, "L1d 32K L2 512K", "6.1.0", "", "AMD EPYC", 2, "rustc 1.95.0"),
+            m,
+            "deterministic"
+        );
     }
 
     #[test]
