@@ -85,6 +85,9 @@ pub struct CheckArgs {
     /// List changed work counters without failing on them.
     #[arg(long)]
     pub accept_counter_changes: bool,
+    /// Compare speedups for information only (never fail on them): for a baseline recorded on another machine.
+    #[arg(long)]
+    pub timings_for_information: bool,
     /// Where to write the JSON of every measure (default: RUN_DIR/check.json).
     #[arg(long)]
     pub json: Option<PathBuf>,

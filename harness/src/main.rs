@@ -136,6 +136,7 @@ fn check_command(args: &CheckArgs) -> Result<(), Error> {
         metric: args.metric.clone(),
         min_effect: args.min_effect,
         accept_counter_changes: args.accept_counter_changes,
+        timings_for_information: args.timings_for_information,
         ..Default::default()
     };
     check::run(&check::CheckRequest { run_dir: &args.run_dir, baseline: &args.baseline, options, json: args.json.clone() })

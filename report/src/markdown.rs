@@ -213,7 +213,9 @@ fn summary_table(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     header.extend(varying.iter().map(|c| c.to_string()));
     header.extend(["seeds", "n", "median total_s [95% CI]", "median Mrays/s"].map(String::from));
     if let Some(reference) = &spec.reference {
-        header.push(format!("speedup vs {reference} [95% CI]"));
+        let metrics: BTreeSet<&str> = runs.iter().map(|r| spec.speedup_metric_of(r.text("workload"))).collect();
+        let metrics = metrics.into_iter().collect::<Vec<_>>().join(" or ");
+        header.push(format!("speedup in {metrics} vs {reference} [95% CI]"));
     }
     let _ = writeln!(md, "| {} |", header.iter().map(|h| cell(h)).collect::<Vec<_>>().join(" | "));
     let _ = writeln!(md, "|{}", "---|".repeat(header.len()));
@@ -230,7 +232,8 @@ fn summary_table(md: &mut String, rows: &Rows, spec: &ReportSpec) {
         cells.push(num(stats::median(&pool::samples(group.iter().copied(), "mrays_per_s"))));
         if let Some(reference) = &spec.reference {
             let key = format!("{}|pooled speedup", first.config_id());
-            cells.push(match pool::ratio_against(spec, runs, reference, &group, "total_s", &["seed"], &key) {
+            let metric = spec.speedup_metric_of(first.text("workload"));
+            cells.push(match pool::ratio_against(spec, runs, reference, &group, metric, &["seed"], &key) {
                 Some(e) => format!("{} [{}, {}]", num(e.value), num(e.lo), num(e.hi)),
                 None => "—".into(),
             });

@@ -11,6 +11,8 @@ pub struct ReportSpec {
     pub description: String,
     /// Label of the series speedups are measured against (`None`: no speedups).
     pub reference: Option<String>,
+    /// The metric speedups are ratios of (`None`: `trace_s` for ray-set workloads, `total_s` for `render`).
+    pub speedup_metric: Option<String>,
     /// Series labels in config order (legend order).
     pub series: Vec<String>,
     /// For each series label, the setting columns (see ROWS.md) its `[[series]]` table fixes.
@@ -23,6 +25,17 @@ pub struct ReportSpec {
     pub config_text: String,
     /// Notes the harness wants in the report (skipped series, thread counts above the core count, …).
     pub notes: Vec<String>,
+}
+
+impl ReportSpec {
+    /// The metric the speedup of a run's configuration is a ratio of (see [`ReportSpec::speedup_metric`]).
+    pub fn speedup_metric_of(&self, workload: &str) -> &str {
+        match &self.speedup_metric {
+            Some(metric) => metric,
+            None if workload == schema::Named::name(schema::Workload::Render) => "total_s",
+            None => "trace_s",
+        }
+    }
 }
 
 /// What a figure's y axis shows.

@@ -61,9 +61,15 @@ pub fn summarise(rows: &Rows, spec: &ReportSpec) -> PolarsResult<DataFrame> {
         .map(|(id, group)| {
             let reference = spec.reference.as_deref()?;
             let key = format!("{id}|speedup");
-            pool::ratio_against(spec, &rows.runs, reference, group, "total_s", &[], &key)
+            let metric = spec.speedup_metric_of(group.first()?.text("workload"));
+            pool::ratio_against(spec, &rows.runs, reference, group, metric, &[], &key)
         })
         .collect();
+    let speedup_metrics: Vec<Option<&str>> = groups
+        .iter()
+        .map(|g| spec.reference.as_ref().and(g.first()).map(|r| spec.speedup_metric_of(r.text("workload"))))
+        .collect();
+    frame.with_column(Column::new("speedup_metric".into(), speedup_metrics))?;
     frame.with_column(float_column("speedup", speedups.iter().map(|e| e.map(|e| e.value))))?;
     frame.with_column(float_column("speedup_lo", speedups.iter().map(|e| e.map(|e| e.lo))))?;
     frame.with_column(float_column("speedup_hi", speedups.iter().map(|e| e.map(|e| e.hi))))?;
@@ -80,7 +86,7 @@ fn column_order() -> Vec<String> {
         names.extend(STATS.iter().map(|stat| format!("{metric}_{stat}")));
     }
     names.extend(deterministic().into_iter().map(String::from));
-    names.extend(["speedup", "speedup_lo", "speedup_hi"].map(String::from));
+    names.extend(["speedup_metric", "speedup", "speedup_lo", "speedup_hi"].map(String::from));
     names
 }
 

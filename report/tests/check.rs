@@ -334,3 +334,16 @@ fn markdown_and_json_list_every_measure() {
     assert_eq!(changes[0].get("new"), Some(&Value::String("7.25".into())));
     assert_eq!(value.get("missing"), Some(&Value::Array(vec![])));
 }
+
+#[test]
+fn timings_for_information_never_fail_but_counters_still_do() {
+    let old = Gen { noise_seed: 41, ..Gen::default() };
+    let slow = Gen { noise_seed: 42, slowdown: Some(("tree", 1.3)), ..Gen::default() };
+    let info = CheckOptions { timings_for_information: true, ..CheckOptions::default() };
+    let outcome = compare("info-slow", &slow, &old, &info).unwrap();
+    assert!(!outcome.failed, "a 30% slowdown is reported, not gated: {}", outcome.markdown());
+    assert!(outcome.speedups.iter().any(|s| s.verdict == SpeedupVerdict::Regressed && !s.gating));
+    assert!(outcome.markdown().contains("compared for information only"));
+    let counter = Gen { noise_seed: 43, nodes_per_ray: Some(("tree", 1000, 2, 99.5)), ..Gen::default() };
+    assert!(compare("info-counter", &counter, &old, &info).unwrap().failed, "counters still gate");
+}

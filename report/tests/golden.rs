@@ -52,6 +52,7 @@ fn spec() -> ReportSpec {
         name: "golden".into(),
         description: "Two series, two object counts, two seeds, three repetitions.".into(),
         reference: Some(LIST.into()),
+        speedup_metric: Some("total_s".into()),
         series: vec![LIST.into(), BVH.into()],
         series_fixed: BTreeMap::from([(LIST.to_string(), fixed.clone()), (BVH.to_string(), fixed)]),
         plots: vec![
@@ -165,7 +166,7 @@ fn golden_report() {
     }
     let metric_svg = std::fs::read_to_string(dir.join("figures/total_vs_objects.svg")).unwrap();
     assert!(metric_svg.contains(LIST) && metric_svg.contains("total time (s)"));
-    assert!(std::fs::read_to_string(dir.join("figures/speedup.svg")).unwrap().contains("speedup vs serial·list (×)"));
+    assert!(std::fs::read_to_string(dir.join("figures/speedup.svg")).unwrap().contains("speedup in total_s vs serial·list (×)"));
 
     // REPORT.md.
     let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
@@ -299,5 +300,20 @@ fn rows_of_two_machines_are_never_pooled() {
         md.lines().filter(|l| l.starts_with("| serial·bvh |")).map(|l| l.rsplit(" | ").nth(1).unwrap()).collect();
     assert_eq!(speedups.len(), 4, "2 object counts x 2 machines: {md}");
     assert_eq!(speedups[0].split(' ').next(), speedups[2].split(' ').next(), "{speedups:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn speedups_default_to_trace_time_for_ray_sets_and_say_so() {
+    let dir = run_dir("speedup-metric", &golden_rows());
+    let spec = ReportSpec { speedup_metric: None, ..spec() };
+    report::write(&dir, &spec).unwrap();
+    let summary = read_summary(&dir);
+    let bvh10 = summary.values().find(|r| r["series"] == BVH && r["objects"] == "10").unwrap();
+    // The golden rows trace primary rays: list trace_s median 1.25, bvh 0.25 (its total adds a 0.0625 build).
+    assert_eq!(bvh10["speedup"].parse::<f64>().unwrap(), 1.25 / 0.25);
+    assert_eq!(bvh10["speedup_metric"], "trace_s");
+    let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
+    assert!(md.contains("speedup in trace_s vs serial·list [95% CI]"), "{md}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -191,17 +191,8 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<
                     v.rays,
                     v.reference
                 );
-                let nan = Timing {
-                    scene_s: f64::NAN,
-                    build_s: f64::NAN,
-                    trace_s: f64::NAN,
-                    encode_s: f64::NAN,
-                    output_hash: v.output_hash,
-                    scene_fingerprint: 0,
-                    stats: Default::default(),
-                    peer_info: "-".into(),
-                };
-                log.append(&row(exp, c, 0, &nan, &v, &provenance, load_average_1m(), timestamp_now()))
+                let untimed = Timing::untimed(v.output_hash);
+                log.append(&row(exp, c, 0, &untimed, &v, &provenance, load_average_1m(), timestamp_now()))
                     .map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))?;
                 failed.insert(run.config);
                 progress.finished(&format!("{} FAILED validation", describe(c)));

@@ -49,7 +49,8 @@ pub fn compare(
     };
     let regressed = speedups.iter().any(|s| s.gating && s.verdict == SpeedupVerdict::Regressed);
     let unaccepted = !options.accept_counter_changes && (!counter_changes.is_empty() || !missing.is_empty());
-    Ok(CheckOutcome { counter_changes, missing, speedups, common, failed: regressed || unaccepted })
+    let timings_for_information = options.timings_for_information;
+    Ok(CheckOutcome { counter_changes, missing, speedups, common, failed: regressed || unaccepted, timings_for_information })
 }
 
 /// What the counter comparison found.
@@ -195,7 +196,8 @@ pub(crate) fn speedups(
                 let ratio = new_e.value / old_e.value;
                 let (lo, hi) = ratio_of_ratios_ci([&ref_new, &ser_new, &ref_old, &ser_old], stats::seed_for(&key));
                 let verdict = verdict(ratio, lo, hi, options.min_effect);
-                let gating = new_group.iter().all(|r| r.num("threads") == options.gate_threads as f64);
+                let gating = !options.timings_for_information
+                    && new_group.iter().all(|r| r.num("threads") == options.gate_threads as f64);
                 out.push(SpeedupComparison {
                     series: label.clone(),
                     point,

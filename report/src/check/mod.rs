@@ -33,11 +33,19 @@ pub struct CheckOptions {
     pub accept_counter_changes: bool,
     /// Only points whose series runs use this many threads gate the check.
     pub gate_threads: u32,
+    /// Speedups are compared for information only and never fail the check (a baseline from another machine).
+    pub timings_for_information: bool,
 }
 
 impl Default for CheckOptions {
     fn default() -> Self {
-        CheckOptions { metric: "trace_s".into(), min_effect: 0.10, accept_counter_changes: false, gate_threads: 1 }
+        CheckOptions {
+            metric: "trace_s".into(),
+            min_effect: 0.10,
+            accept_counter_changes: false,
+            gate_threads: 1,
+            timings_for_information: false,
+        }
     }
 }
 
@@ -118,4 +126,6 @@ pub struct CheckOutcome {
     pub common: usize,
     /// The gate: a gating regression, or counter changes / missing configurations not accepted.
     pub failed: bool,
+    /// Speedups were compared for information only.
+    pub timings_for_information: bool,
 }

@@ -11,6 +11,12 @@ impl CheckOutcome {
     /// A Markdown section for CI logs: overall result, counter table, speedup table (regressions first).
     pub fn markdown(&self) -> String {
         let mut md = String::from("## Regression check\n\n");
+        let mode = if self.timings_for_information {
+            "timings: compared for information only (the baseline may come from another machine); the gate is the exact counters"
+        } else {
+            "timings: single-thread speedups gate the check"
+        };
+        let _ = writeln!(md, "{mode}\n");
         let _ = writeln!(md, "**{}** — {}\n", if self.failed { "FAIL" } else { "PASS" }, self.reasons());
         counter_table(&mut md, self);
         if !self.missing.is_empty() {
@@ -221,6 +227,7 @@ mod tests {
             }],
             common: 3,
             failed: true,
+            timings_for_information: false,
         };
         let json = outcome.to_json();
         assert!(json.ends_with("}\n"), "{json}");

@@ -74,13 +74,13 @@ fn chart_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Chart {
     let (y_label, guide) = match plot.kind {
         PlotKind::Metric => (metric_label(&plot.y), None),
         PlotKind::Speedup if is_time(&plot.y) => {
-            (format!("speedup vs {reference} (×)"), Some((1.0, format!("same as {reference}"))))
+            (format!("speedup in {} vs {reference} (×)", plot.y), Some((1.0, format!("same as {reference}"))))
         }
         PlotKind::Speedup => {
             (format!("{} ratio, {reference} / series (×)", plot.y), Some((1.0, format!("same as {reference}"))))
         }
         PlotKind::Efficiency => {
-            (format!("efficiency: speedup vs {reference} / threads"), Some((1.0, "ideal".to_string())))
+            (format!("efficiency: speedup in {} vs {reference} / threads", plot.y), Some((1.0, "ideal".to_string())))
         }
     };
     let title = if lines.is_empty() { format!("{} (no data)", plot.title) } else { plot.title.clone() };
