@@ -244,8 +244,8 @@ fn summary_table(md: &mut String, rows: &Rows, spec: &ReportSpec) {
 }
 
 /// A table cell: pipes escaped, line breaks flattened.
-fn cell(text: &str) -> String {
-    text.replace('|', "\\|").replace('\n', " ")
+pub(crate) fn cell(text: &str) -> String {
+    text.replace('|', "\\|").replace(['\n', '\r'], " ")
 }
 
 /// A number as short as it can be written exactly to four significant digits (`2`, `0.1`, `4.182`).

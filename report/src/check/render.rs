@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use serde::Serialize;
 
 use super::{CheckOutcome, CounterChange, Estimate, SpeedupComparison, SpeedupVerdict};
-use crate::markdown::num;
+use crate::markdown::{cell, num};
 
 impl CheckOutcome {
     /// A Markdown section for CI logs: overall result, counter table, speedup table (regressions first).
@@ -141,11 +141,6 @@ fn speedup_table(md: &mut String, speedups: &[SpeedupComparison]) {
         );
     }
     md.push('\n');
-}
-
-/// A Markdown table cell: pipes escaped, line breaks flattened.
-fn cell(text: &str) -> String {
-    text.replace('|', "\\|").replace(['\n', '\r'], " ")
 }
 
 /// The `check.json` document.
