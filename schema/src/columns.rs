@@ -64,6 +64,9 @@ declare_columns! {
             range(*BvhParams::SAH_COSTS.start(), *BvhParams::SAH_COSTS.end()), applies sah_split else None, added 2;
     }
     measures {
+        /// Wall time of the backend's one-time start-up in the process that times the configuration: thread pool,
+        /// and for Embree finding and loading the library and `rtcNewDevice`; in no other phase and not in `total_s`.
+        setup_s: Option<f64>, Metric, unit "s", decimals 9, added 2;
         /// Wall time of scene generation; empty where validation failed (never timed).
         scene_s: Option<f64>, Metric, unit "s", decimals 9;
         /// Wall time of building the structure; empty where validation failed (never timed).
@@ -72,7 +75,7 @@ declare_columns! {
         trace_s: Option<f64>, Metric, unit "s", decimals 9;
         /// Wall time of PNG encoding (0 for ray sets); empty where validation failed (never timed).
         encode_s: Option<f64>, Metric, unit "s", decimals 9;
-        /// Sum of the phases; empty where validation failed (never timed).
+        /// scene_s + build_s + trace_s + encode_s (not setup_s); empty where validation failed (never timed).
         total_s: Option<f64>, Metric, unit "s", decimals 9;
         /// Rays traced (from the counted pass).
         rays: u64, Counter, unit "rays";
@@ -118,8 +121,16 @@ declare_columns! {
         validation: String, Validation;
         /// The reference the backend was validated against.
         validated_against: String, Validation;
-        /// Rays whose answers disagreed with the reference.
+        /// Rays whose answers disagreed with the reference and that f64 brute force did not excuse as grazing.
         mismatches: u64, Validation;
+        /// Rays whose answers disagreed with the reference where f64 brute force shows a grazing ray: the hit/miss
+        /// decision or the distance lies within the f32 rounding bound of the ray-sphere test (tolerated).
+        grazing: u64, Validation, added 2;
+        /// Rays of the reference's answers checked against f64 brute force before it was trusted.
+        reference_checked: u64, Validation, added 2;
+        /// Which answers f64 brute force showed wrong on the rays counted in `mismatches`: `-` (none), `backend`,
+        /// `reference` or `both`.
+        wrong_side: String, Validation = "-".to_string(), added 2;
         /// Peer library facts (`-` for the tracer's structures).
         peer_info: String, Provenance = "-".to_string();
         /// CPU vendor as the kernel reports it (`vendor_id`).
