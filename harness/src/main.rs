@@ -142,15 +142,9 @@ fn check_command(args: &CheckArgs) -> Result<(), Error> {
     check::run(&check::CheckRequest { run_dir: &args.run_dir, baseline: &args.baseline, options, json: args.json.clone() })
 }
 
-/// Reads one JSON worker request from stdin, times it, and prints the timing as one JSON line.
+/// Answers JSON worker requests on stdin with JSON timing lines on stdout (see `run::worker`).
 fn worker_command() -> Result<(), Error> {
-    let mut text = String::new();
-    std::io::Read::read_to_string(&mut std::io::stdin(), &mut text).map_err(|e| Error::Input(format!("stdin: {e}")))?;
-    let request: run::worker::WorkerRequest =
-        serde_json::from_str(&text).map_err(|e| Error::Input(format!("stdin: not a worker request: {e}")))?;
-    let timing = run::worker::serve(&request)?;
-    println!("{}", serde_json::to_string(&timing).expect("timings serialize"));
-    Ok(())
+    run::worker::serve(std::io::stdin().lock(), std::io::stdout().lock())
 }
 
 fn report_command(args: &ReportArgs) -> Result<(), Error> {

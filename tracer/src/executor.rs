@@ -2,7 +2,9 @@
 //!
 //! - `serial`: rows in order on the calling thread.
 //! - `rayon-bands` (the paper's main method): the image cut into [`RAYON_BANDS_PER_THREAD`] × threads
-//!   horizontal bands, work-stolen by a rayon pool built for this call (never the global pool).
+//!   horizontal bands, work-stolen by the rayon pool the call runs in when that pool has exactly `threads`
+//!   threads (a caller that times runs starts it once, outside its timers), else by a pool built for this
+//!   call (never the global pool).
 //! - `mpsc-threads` (the paper's second method): one scoped std thread per band, one band per thread
 //!   (a static split); each renders into its own buffer and sends it through an mpsc channel to the
 //!   calling thread, which copies it into place.
@@ -96,11 +98,7 @@ impl Strategy {
             StrategyKind::RayonBands => {
                 let bands = (threads * RAYON_BANDS_PER_THREAD).clamp(1, height.max(1));
                 let rows_per_band = height.div_ceil(bands).max(1);
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .expect("building a rayon thread pool");
-                pool.install(|| {
+                let mut bands = || {
                     out.par_chunks_mut(rows_per_band * width)
                         .enumerate()
                         .map(|(b, rows)| band(b * rows_per_band, rows))
@@ -108,7 +106,16 @@ impl Strategy {
                             a.merge(b);
                             a
                         })
-                })
+                };
+                if rayon::current_thread_index().is_some() && rayon::current_num_threads() == threads {
+                    bands()
+                } else {
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(threads)
+                        .build()
+                        .expect("building a rayon thread pool");
+                    pool.install(bands)
+                }
             }
             StrategyKind::MpscThreads => {
                 let rows_per_band = height.div_ceil(threads).max(1);
@@ -134,5 +141,32 @@ impl Strategy {
                 })
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::counters::NoCounters;
+
+    /// The names of the threads that ran each row of a 16-row image under `strategy`.
+    fn row_threads(strategy: Strategy) -> Vec<String> {
+        let mut out = vec![0u8; 16];
+        let names = std::sync::Mutex::new(Vec::new());
+        let _: NoCounters = strategy.run_rows(1, &mut out, |_, _, _| {
+            names.lock().unwrap().push(std::thread::current().name().unwrap_or("").to_string());
+        });
+        names.into_inner().unwrap()
+    }
+
+    #[test]
+    fn rayon_bands_run_in_the_callers_pool_when_it_has_the_threads() {
+        let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).thread_name(|i| format!("setup-{i}")).build().unwrap();
+        let strategy = Strategy::new(StrategyKind::RayonBands, 2);
+        let inside = pool(2).install(|| row_threads(strategy));
+        assert!(inside.iter().all(|n| n.starts_with("setup-")), "{inside:?}");
+        let other_size = pool(3).install(|| row_threads(strategy));
+        assert!(other_size.iter().all(|n| !n.starts_with("setup-")), "{other_size:?}");
+        assert!(row_threads(strategy).iter().all(|n| !n.starts_with("setup-")));
     }
 }

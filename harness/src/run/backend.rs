@@ -36,6 +36,45 @@ impl Accelerator for EmbreePackets {
     }
 }
 
+/// What a backend starts once per process and configuration, before any timed phase (the `setup_s` phase):
+/// the rayon pool of the configured threads that builds and traces run in, and for Embree the library
+/// (found and loaded once per process) and a device.
+pub struct Setup {
+    pool: rayon::ThreadPool,
+    embree: Option<EmbreeDevice>,
+    /// Wall time of starting all of it.
+    pub setup_s: f64,
+}
+
+impl Setup {
+    /// Starts what `settings` needs, timed.
+    pub fn start(settings: &Settings) -> Result<Setup, Error> {
+        let t = std::time::Instant::now();
+        let threads = settings.strategy().threads.max(1);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| Error::Run(format!("cannot start a pool of {threads} threads: {e}")))?;
+        // Every worker thread started before the clock stops.
+        pool.broadcast(|_| ());
+        let embree = match settings.peer() {
+            Some(peer) if peer.needs_embree() => {
+                let quality = settings.embree_build.unwrap_or_default();
+                let isa = settings.embree_isa.and_then(|i| i.pinned()).map(str::to_string);
+                let config = EmbreeConfig { threads: Some(threads), isa, quality };
+                Some(EmbreeDevice::new(&config).map_err(|e| Error::Run(format!("embree: {e}")))?)
+            }
+            _ => None,
+        };
+        Ok(Setup { pool, embree, setup_s: t.elapsed().as_secs_f64() })
+    }
+
+    /// Runs `f` in the pool (builds and traces run here, so the tracer's executor reuses the pool).
+    pub fn install<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
+        self.pool.install(f)
+    }
+}
+
 /// A built backend of any kind.
 pub enum Backend {
     Ours(BuiltAccel),
@@ -46,29 +85,25 @@ pub enum Backend {
 }
 
 impl Backend {
-    /// Builds the backend `settings` names; peers build with `settings.strategy.threads` threads.
-    pub fn build(settings: &Settings, spheres: &[Sphere]) -> Result<Backend, Error> {
+    /// Builds the backend `settings` names over `spheres` with what `setup` started: ours and obvhs in its
+    /// pool (so with the configured threads), Embree on its device (TBB, the configured threads).
+    pub fn build(settings: &Settings, spheres: &[Sphere], setup: &Setup) -> Result<Backend, Error> {
         let Some(peer) = settings.peer() else {
-            return Ok(Backend::Ours(BuiltAccel::build(spheres, &settings.accel_params())));
+            return Ok(setup.install(|| Backend::Ours(BuiltAccel::build(spheres, &settings.accel_params()))));
         };
-        let threads = settings.strategy().threads.max(1);
         Ok(match peer {
             PeerKind::ObvhsBvh2 | PeerKind::ObvhsCwbvh => {
-                // obvhs builds with rayon: inside this pool it uses exactly the configured threads.
-                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("building a rayon pool");
                 let preset = settings.obvhs_build.unwrap_or_default();
-                pool.install(|| match peer {
+                setup.install(|| match peer {
                     PeerKind::ObvhsBvh2 => Backend::ObvhsBvh2(ObvhsBvh2::build(spheres, preset)),
                     _ => Backend::ObvhsCwbvh(ObvhsCwbvh::build(spheres, preset)),
                 })
             }
             PeerKind::Embree | PeerKind::EmbreePackets => {
+                let device = setup.embree.as_ref().expect("an Embree configuration's setup starts a device");
                 let quality = settings.embree_build.unwrap_or_default();
-                let isa = settings.embree_isa.and_then(|i| i.pinned()).map(str::to_string);
-                let config = EmbreeConfig { threads: Some(threads), isa, quality };
-                let device = EmbreeDevice::new(&config).map_err(|e| Error::Run(format!("embree: {e}")))?;
                 let scene =
-                    EmbreeSpheres::build(&device, spheres, quality).map_err(|e| Error::Run(format!("embree: {e}")))?;
+                    EmbreeSpheres::build(device, spheres, quality).map_err(|e| Error::Run(format!("embree: {e}")))?;
                 if peer == PeerKind::Embree {
                     Backend::Embree(scene)
                 } else {

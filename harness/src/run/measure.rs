@@ -11,12 +11,16 @@ use tracer::rays::{RayAnswers, RaySet, trace};
 use tracer::render::{RenderSettings, render};
 use tracer::scene::Scene;
 
-use super::backend::Backend;
+use super::backend::{Backend, Setup};
 use crate::error::Error;
 
 /// Wall times of one run, and what it produced (a worker process answers with it as JSON).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Timing {
+    /// The backend's one-time start-up in this process ([`Setup`]), the same for every run of a configuration;
+    /// not part of [`Timing::total_s`]. Absent (0) in answers of workers older than the `setup_s` phase.
+    #[serde(default)]
+    pub setup_s: f64,
     pub scene_s: f64,
     pub build_s: f64,
     pub trace_s: f64,
@@ -34,6 +38,7 @@ impl Timing {
     pub fn untimed(output_hash: u64) -> Timing {
         let nan = f64::NAN;
         Timing {
+            setup_s: nan,
             scene_s: nan,
             build_s: nan,
             trace_s: nan,
@@ -45,7 +50,7 @@ impl Timing {
         }
     }
 
-    /// Sum of the phases.
+    /// Sum of the phases run for every repetition (not `setup_s`).
     pub fn total_s(&self) -> f64 {
         self.scene_s + self.build_s + self.trace_s + self.encode_s
     }
@@ -96,25 +101,22 @@ impl<C: Counters> AccelVisitor for Work<'_, C> {
     }
 }
 
-/// Runs `settings` once with every phase timed (no counters). `rays` is the workload's ray set.
-pub fn timed(settings: &Settings, file: Option<&Scene>, rays: Option<&RaySet>) -> Result<Timing, Error> {
+/// Runs `settings` once with every phase timed (no counters), on what `setup` started. `rays` is the
+/// workload's ray set. Builds and traces run in the setup's pool.
+pub fn timed(settings: &Settings, file: Option<&Scene>, rays: Option<&RaySet>, setup: &Setup) -> Result<Timing, Error> {
     let t = Instant::now();
     let scene = make_scene(settings, file);
     let scene_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let backend = Backend::build(settings, &scene.spheres)?;
+    let backend = Backend::build(settings, &scene.spheres, setup)?;
     let build_s = t.elapsed().as_secs_f64();
     let mut encode_s = 0.0;
     let t = Instant::now();
-    let (output_hash, _, _) = backend.visit(Work::<NoCounters> {
-        scene: &scene,
-        settings,
-        rays,
-        encode_s: Some(&mut encode_s),
-        _c: Default::default(),
-    });
+    let work = Work::<NoCounters> { scene: &scene, settings, rays, encode_s: Some(&mut encode_s), _c: Default::default() };
+    let (output_hash, _, _) = setup.install(|| backend.visit(work));
     let trace_s = t.elapsed().as_secs_f64() - encode_s;
     Ok(Timing {
+        setup_s: setup.setup_s,
         scene_s,
         build_s,
         trace_s,
@@ -135,9 +137,10 @@ pub fn counted(
     answer_rays: &RaySet,
 ) -> Result<(WorkCounters, u64, RayAnswers), Error> {
     let scene = make_scene(settings, file);
-    let backend = Backend::build(settings, &scene.spheres)?;
-    let (hash, c, answers) =
-        backend.visit(Work::<WorkCounters> { scene: &scene, settings, rays, encode_s: None, _c: Default::default() });
+    let setup = Setup::start(settings)?;
+    let backend = Backend::build(settings, &scene.spheres, &setup)?;
+    let work = Work::<WorkCounters> { scene: &scene, settings, rays, encode_s: None, _c: Default::default() };
+    let (hash, c, answers) = setup.install(|| backend.visit(work));
     let answers = match (answers, rays) {
         (Some(a), Some(r)) if std::ptr::eq(r, answer_rays) => a,
         _ => {
@@ -148,7 +151,7 @@ pub fn counted(
                     trace::<_, NoCounters>(a, self.0, &self.1.strategy()).0
                 }
             }
-            backend.visit(Answers(answer_rays, settings))
+            setup.install(|| backend.visit(Answers(answer_rays, settings)))
         }
     };
     Ok((c, hash, answers))
@@ -161,6 +164,7 @@ mod tests {
     #[test]
     fn timings_round_trip_through_json() {
         let t = Timing {
+            setup_s: 0.0625,
             scene_s: 0.125,
             build_s: 1e-5,
             trace_s: 3.25,

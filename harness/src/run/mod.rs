@@ -22,7 +22,8 @@ use crate::rows::RowLog;
 use measure::Timing;
 use provenance::{Provenance, load_average_1m, timestamp_now};
 use validate::RayBank;
-use worker::WorkerRequest;
+use backend::Setup;
+use worker::{Worker, WorkerRequest};
 
 /// File names inside a run folder.
 pub const RUNS_CSV: &str = "runs.csv";
@@ -111,6 +112,7 @@ fn row(
     row.repetition = rep;
     // A configuration that failed validation is never timed: its metrics stay empty.
     let metric = |x: f64| x.is_finite().then_some(x);
+    row.setup_s = metric(t.setup_s);
     row.scene_s = metric(t.scene_s);
     row.build_s = metric(t.build_s);
     row.trace_s = metric(t.trace_s);
@@ -172,6 +174,14 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<
         eprintln!("resuming {}: {} rows already recorded, {} runs to go", dir.display(), done.len(), todo.len());
     }
     let mut progress = Progress::new(todo.len());
+    // Every configuration is timed in one process with one setup (its warm-ups first, then every repetition):
+    // Embree in a worker process of its own, kept while its runs interleave with others'; the rest here.
+    let mut runs_left: HashMap<usize, usize> = HashMap::new();
+    for run in &todo {
+        *runs_left.entry(run.config).or_default() += 1;
+    }
+    let mut workers: HashMap<usize, Worker> = HashMap::new();
+    let mut setups: HashMap<usize, Setup> = HashMap::new();
     let mut bank = RayBank::default();
     let mut checked: HashMap<usize, Checked> = HashMap::new();
     let mut failed: HashSet<usize> = HashSet::new();
@@ -203,13 +213,26 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<
         let load = load_average_1m();
         let ts = timestamp_now();
         let timing = if c.settings.peer().is_some_and(PeerKind::needs_embree) {
-            let exe =
-                std::env::current_exe().map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
-            worker::time(&exe, None, &worker_request(plan, c))?
+            if !workers.contains_key(&run.config) {
+                let exe = std::env::current_exe()
+                    .map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
+                workers.insert(run.config, Worker::start(&exe, None)?);
+            }
+            workers.get_mut(&run.config).expect("started above").time(&worker_request(plan, c))?
         } else {
+            if !setups.contains_key(&run.config) {
+                setups.insert(run.config, Setup::start(&c.settings)?);
+            }
             let rays = workload_rays(plan, &c.settings, &mut bank);
-            measure::timed(&c.settings, plan.scene_file(), rays.as_deref())?
+            measure::timed(&c.settings, plan.scene_file(), rays.as_deref(), &setups[&run.config])?
         };
+        // After a configuration's last run its worker process, pool and device go.
+        let left = runs_left.get_mut(&run.config).expect("counted for every run to do");
+        *left -= 1;
+        if *left == 0 {
+            workers.remove(&run.config);
+            setups.remove(&run.config);
+        }
         let Some(rep) = run.repetition else {
             progress.finished(&format!("{} warm-up", describe(c)));
             continue;
@@ -246,7 +269,7 @@ mod tests {
         assert_eq!((row.validation.as_str(), row.mismatches), ("FAILED", 3));
         let text = format!("{}\n{}", schema::row::header(), schema::row::csv_line(&row).unwrap());
         let back = &schema::row::read_rows(&text).unwrap()[0];
-        let metrics = [back.scene_s, back.build_s, back.trace_s, back.encode_s, back.total_s, back.mrays_per_s];
+        let metrics = [back.setup_s, back.scene_s, back.build_s, back.trace_s, back.encode_s, back.total_s, back.mrays_per_s];
         assert!(metrics.iter().all(Option::is_none), "{metrics:?} in {text}");
     }
 }
