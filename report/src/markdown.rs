@@ -23,15 +23,20 @@ pub fn report(rows: &Rows, spec: &ReportSpec, claims: &[ClaimResult]) -> String 
         md.push_str("These configurations disagreed with the reference before timing and were **not timed**; their series lack these points.
 
 ");
-        md.push_str("| series | accel | scene | objects | seed | workload | threads | rays disagreeing | reference |
-|---|---|---|---|---|---|---|---|---|
+        md.push_str("Each disagreement was decided by an f64 brute force: `wrong` says whose answer it showed wrong \
+(beyond the f32 rounding bound of the ray-sphere test); grazing rays (within it) are tolerated and counted apart.
+
+");
+        md.push_str("| series | accel | scene | objects | seed | workload | threads | rays disagreeing | wrong | grazing (tolerated) | reference |
+|---|---|---|---|---|---|---|---|---|---|---|
 ");
         for r in &rows.failed {
             let _ = writeln!(
                 md,
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 r.series(), r.text("accel"), r.text("scene"), r.text("objects"), r.text("seed"), r.text("workload"),
-                r.text("threads"), r.text("mismatches"), r.text("validated_against")
+                r.text("threads"), r.text("mismatches"), r.text("wrong_side"), r.text("grazing"),
+                r.text("validated_against")
             );
         }
         md.push('\n');
@@ -101,6 +106,7 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
         distinct(runs, "rustc"),
         distinct(runs, "harness_version")
     );
+    validation_line(md, runs);
     let _ =
         writeln!(md, "- Time: {} to {}", stamps.first().copied().unwrap_or("?"), stamps.last().copied().unwrap_or("?"));
     md.push_str(
@@ -113,6 +119,37 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
             md,
             "> **Warning:** {over} rows ran with more threads than the machine's logical cores; \
              their times measure oversubscription.\n"
+        );
+    }
+}
+
+/// How the timed configurations were validated: references, rays of the references checked against f64 brute
+/// force, and grazing rays tolerated.
+fn validation_line(md: &mut String, runs: &[Run]) {
+    let mut configs: std::collections::BTreeMap<&str, &Run> = Default::default();
+    for r in runs {
+        configs.entry(r.config_id()).or_insert(r);
+    }
+    let grazing: Vec<&&Run> = configs.values().filter(|r| r.num("grazing") > 0.0).collect();
+    let graze_rays: f64 = grazing.iter().map(|r| r.num("grazing")).sum();
+    let checked = configs.values().map(|r| r.num("reference_checked")).fold(0.0, f64::max);
+    let _ = write!(
+        md,
+        "- Validation: {} timed configurations agreed with their reference ({}) before timing",
+        configs.len(),
+        distinct(runs, "validated_against")
+    );
+    if checked > 0.0 {
+        let _ = write!(md, "; each reference checked against f64 brute force on up to {checked} rays of its ray set");
+    }
+    if grazing.is_empty() {
+        md.push('\n');
+    } else {
+        let _ = writeln!(
+            md,
+            "; {graze_rays} grazing rays tolerated in {} configurations (f64 brute force puts them within the f32 \
+             rounding bound of the ray-sphere test)",
+            grazing.len()
         );
     }
 }

@@ -260,7 +260,7 @@ fn failed_validation_is_excluded_and_announced_and_filters_narrow_plots() {
     assert!(!summary.contains_key("00000000000bad00"));
     let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
     assert!(md.contains("VALIDATION FAILURES"), "announced loudly");
-    assert!(md.contains("| serial·list | list | random-spheres | 10 | 9 | primary | 1 | 17 |"), "{md}");
+    assert!(md.contains("| serial·list | list | random-spheres | 10 | 9 | primary | 1 | 17 | - | 0 |"), "{md}");
     let svg = std::fs::read_to_string(dir.join("figures/total_vs_objects.svg")).unwrap();
     let unfiltered = run_dir("unfiltered", &golden);
     report::write(&unfiltered, &self::spec()).unwrap();
