@@ -31,7 +31,8 @@ pub enum Command {
     List,
     /// Compare a run with a stored baseline: exact work counters, and single-thread speedups with intervals.
     Check(CheckArgs),
-    /// Build another git revision and time both builds on a config, interleaved; report new/old ratios.
+    /// Build another git revision and time both builds on a config, interleaved; report new/old ratios, and fail
+    /// when the builds' answers differ.
     Ab(AbArgs),
     /// Manage stored baselines.
     #[command(subcommand)]
@@ -106,6 +107,10 @@ pub struct AbArgs {
     /// Smallest slowdown that counts as a regression (0.10 = 10%).
     #[arg(long, default_value_t = 0.10)]
     pub min_effect: f64,
+    /// Compare timings even where the two builds' answers differ (exit 0 unless slower; the table says
+    /// `differs`). Answers that change between runs of one build always fail.
+    #[arg(long)]
+    pub allow_different_answers: bool,
 }
 
 #[derive(Subcommand, Debug)]

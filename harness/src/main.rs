@@ -38,7 +38,13 @@ fn main() -> ExitCode {
         Command::History(HistoryCommand::Plot { dir }) => report::history::plot(&dir)
             .map(|files| files.iter().for_each(|f| println!("{}", f.display())))
             .map_err(|e| Error::Input(e.to_string())),
-        Command::Ab(args) => ab::run(&ab::AbRequest { base: &args.base, config: &args.config, quick: args.quick, min_effect: args.min_effect }),
+        Command::Ab(args) => ab::run(&ab::AbRequest {
+            base: &args.base,
+            config: &args.config,
+            quick: args.quick,
+            min_effect: args.min_effect,
+            allow_different_answers: args.allow_different_answers,
+        }),
         Command::Baseline(BaselineCommand::Save { run_dir, name, force }) => baseline::save(&run_dir, &name, force).map(|dest| {
             println!("baseline saved: {}", dest.display());
         }),

@@ -354,17 +354,40 @@ fn baseline_save_and_check_bad_input() {
     assert!(stderr(&o).contains("does not match the baseline"), "{}", stderr(&o));
 }
 
+/// The length and a hash of a file's bytes.
+fn ab_digest(path: &Path) -> (u64, u64) {
+    use std::hash::{DefaultHasher, Hasher};
+    use std::io::Read;
+    let mut file = std::fs::File::open(path).unwrap();
+    let (mut hash, mut buf, mut len) = (DefaultHasher::new(), vec![0; 1 << 20], 0);
+    loop {
+        match file.read(&mut buf).unwrap() {
+            0 => return (len, hash.finish()),
+            n => {
+                hash.write(&buf[..n]);
+                len += n as u64;
+            }
+        }
+    }
+}
+
 #[test]
 fn ab_against_head_reports_ratios_near_one() {
     let (_, flat, _, front_to_back) = names();
-    // Builds HEAD in a worktree under target/ab/ (a few minutes on a clean machine), then times a tiny config
-    // with both builds, interleaved. The working tree's code is HEAD's or a small change of it: no regression.
+    // Builds HEAD's workspace crates in a worktree under target/ab/ into this build's target folder (its
+    // dependencies are this build's: a minute or two), unless an earlier run cached HEAD's binary there; then
+    // times a tiny config with both builds, interleaved. The working tree's code is HEAD's or a small change of
+    // it: no regression, the same answers.
     let dir = temp("ab");
+    let sweep = format!("[sweep]\naccel = \"{flat}\"\ntraversal = \"{front_to_back}\"\nobjects = 3000\nwidth = 96\nheight = 64\nworkload = \"primary\"\n");
     let cfg = dir.join("ab.toml");
-    std::fs::write(&cfg, format!("name = \"ab\"\nrepetitions = 6\nwarmups = 1\n[sweep]\naccel = \"{flat}\"\ntraversal = \"{front_to_back}\"\nobjects = 3000\nwidth = 96\nheight = 64\nworkload = \"primary\"\n")).unwrap();
+    std::fs::write(&cfg, format!("name = \"ab\"\nrepetitions = 6\nwarmups = 1\n{sweep}")).unwrap();
+    let binary = Path::new(env!("CARGO_BIN_EXE_harness"));
+    let before = ab_digest(binary);
     let o = harness().args(["ab", "--base", "HEAD", cfg.to_str().unwrap()]).output().unwrap();
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{out}\n{}", stderr(&o));
+    assert_eq!(ab_digest(binary), before, "the base build's binary does not stay in place of this one");
     assert!(out.contains("| default | random-spheres objects 3000 serial |"), "{out}");
     assert!(out.contains("| same |"), "both builds answer alike: {out}");
     let ratio: f64 = out
@@ -380,6 +403,11 @@ fn ab_against_head_reports_ratios_near_one() {
         .parse()
         .unwrap();
     assert!((0.7..1.4).contains(&ratio), "new/old near 1, got {ratio}: {out}");
+    // The second time, HEAD's binary is cached.
+    let short = dir.join("short.toml");
+    std::fs::write(&short, format!("name = \"ab\"\nrepetitions = 2\nwarmups = 0\n{sweep}")).unwrap();
+    let o = harness().args(["ab", "--base", "HEAD", short.to_str().unwrap()]).output().unwrap();
+    assert!(o.status.success() && stderr(&o).contains("(built before)"), "{}", stderr(&o));
     let o = harness().args(["ab", "--base", "no-such-revision", cfg.to_str().unwrap()]).output().unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
 }
