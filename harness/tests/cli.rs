@@ -97,12 +97,12 @@ fn bad_configs_exit_2_with_one_line_and_write_nothing() {
         (
             "bad speedup metric",
             "name = \"t\"\nspeedup_metric = \"speed\"\n[sweep]\n",
-            "speedup_metric: unknown metric \"speed\" (allowed: scene_s,",
+            "speedup_metric: unknown metric \"speed\" (allowed: setup_s, scene_s,",
         ),
         (
             "bad plot metric",
             "name = \"t\"\n[sweep]\n[[plot]]\nfile = \"f\"\ny = \"speed\"\n",
-            "plot[0].y: unknown metric \"speed\" (allowed: scene_s, build_s, trace_s, encode_s, total_s,",
+            "plot[0].y: unknown metric \"speed\" (allowed: setup_s, scene_s, build_s, trace_s, encode_s, total_s,",
         ),
         (
             "bad order",
