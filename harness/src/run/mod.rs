@@ -62,7 +62,14 @@ struct Checked {
     counters: WorkCounters,
     output_hash: u64,
     reference: &'static str,
+    /// Disagreements with the reference that f64 brute force did not accept.
     mismatches: usize,
+    /// Disagreements it tolerated (grazing rays).
+    grazing: usize,
+    /// Rays of the reference's answers checked against f64 brute force.
+    reference_checked: usize,
+    /// Whose answers f64 showed wrong: `-`, `backend`, `reference` or `both`.
+    wrong_side: &'static str,
     rays: usize,
 }
 
@@ -81,13 +88,18 @@ pub fn worker_request(plan: &Plan, c: &Configuration) -> WorkerRequest {
 
 fn check(plan: &Plan, c: &Configuration, bank: &mut RayBank) -> Result<Checked, Error> {
     let rays = workload_rays(plan, &c.settings, bank);
-    let (set, reference, name) = bank.get(&c.settings, plan.scene_file(), c.settings.workload.validation_kind());
-    let (counters, output_hash, answers) = measure::counted(&c.settings, plan.scene_file(), rays.as_deref(), &set)?;
+    let reference = bank.reference(&c.settings, plan.scene_file(), c.settings.workload.validation_kind());
+    let set = &reference.set;
+    let (counters, output_hash, answers) = measure::counted(&c.settings, plan.scene_file(), rays.as_deref(), set)?;
+    let judged = validate::judge(&reference, &answers);
     Ok(Checked {
         counters,
         output_hash,
-        reference: name,
-        mismatches: validate::mismatches(&set, &reference, &answers),
+        reference: reference.name,
+        mismatches: judged.mismatches,
+        grazing: judged.grazing,
+        reference_checked: judged.reference_checked,
+        wrong_side: judged.wrong_side,
         rays: set.rays.len(),
     })
 }
@@ -141,6 +153,9 @@ fn row(
     row.validation = if v.mismatches == 0 { "exact".into() } else { "FAILED".into() };
     row.validated_against = v.reference.to_string();
     row.mismatches = v.mismatches as u64;
+    row.grazing = v.grazing as u64;
+    row.reference_checked = v.reference_checked as u64;
+    row.wrong_side = v.wrong_side.to_string();
     row.peer_info = t.peer_info.clone();
     let m = &p.machine;
     row.cpu_vendor = m.cpu_vendor.clone();
@@ -195,11 +210,18 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<
             let v = check(plan, c, &mut bank)?;
             if v.mismatches > 0 {
                 eprintln!(
-                    "VALIDATION FAILED: {}: {} of {} rays disagree with {}; this configuration is not timed",
+                    "VALIDATION FAILED: {}: {} of {} rays disagree with {} beyond f64 brute force's tolerance \
+                     ({} grazing tolerated); f64 shows the {} answers wrong; this configuration is not timed",
                     describe(c),
                     v.mismatches,
                     v.rays,
-                    v.reference
+                    v.reference,
+                    v.grazing,
+                    match v.wrong_side {
+                        "both" => "backend's and the reference's",
+                        "reference" => "reference's",
+                        _ => "backend's",
+                    }
                 );
                 let untimed = Timing::untimed(v.output_hash);
                 log.append(&row(exp, c, 0, &untimed, &v, &provenance, load_average_1m(), timestamp_now()))
@@ -263,10 +285,20 @@ mod tests {
         let exp = Experiment::parse(Path::new("t.toml"), "name = \"t\"\n[sweep]\nworkload = \"primary\"\n").unwrap();
         let plan = Plan::new(&exp, 2).unwrap();
         let counters = WorkCounters { rays: 786_432, ..Default::default() };
-        let v = Checked { counters, output_hash: 1, reference: "reference", mismatches: 3, rays: 786_432 };
+        let v = Checked {
+            counters,
+            output_hash: 1,
+            reference: "reference",
+            mismatches: 3,
+            grazing: 2,
+            reference_checked: 16_384,
+            wrong_side: "backend",
+            rays: 786_432,
+        };
         let row =
             row(&exp, &plan.configurations[0], 0, &Timing::untimed(1), &v, &Provenance::collect(), 0.5, "t".into());
         assert_eq!((row.validation.as_str(), row.mismatches), ("FAILED", 3));
+        assert_eq!((row.grazing, row.reference_checked, row.wrong_side.as_str()), (2, 16_384, "backend"));
         let text = format!("{}\n{}", schema::row::header(), schema::row::csv_line(&row).unwrap());
         let back = &schema::row::read_rows(&text).unwrap()[0];
         let metrics = [back.setup_s, back.scene_s, back.build_s, back.trace_s, back.encode_s, back.total_s, back.mrays_per_s];

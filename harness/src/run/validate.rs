@@ -1,23 +1,42 @@
-//! Validation before timing: a backend's answers to a whole ray set against a trusted reference.
+//! Validation before timing: a backend's answers to a whole ray set against a trusted reference, with f64
+//! brute force as the arbiter.
 //!
-//! The reference is brute force for scenes of at most [`BRUTE_FORCE_MAX`] spheres, else the tracer's flat BVH
-//! (binned SAH, front-to-back), which the test suite validates against brute force. Hit/miss must agree
-//! exactly and `t` within 1e-4 relative; primitive ids are not compared (overlapping spheres may tie).
-//! For hits very near the ray origin (a bounce that starts inside an overlapping sphere) a relative bound
-//! is meaningless: both distances are computed from f32 coordinates of the origin's magnitude, so the
-//! bound has a floor of [`ORIGIN_ULPS`] ulps of that magnitude (in units of the direction's length).
+//! The reference is f32 brute force ([`List`]) for scenes of at most [`BRUTE_FORCE_MAX`] spheres, else the
+//! tracer's flat BVH (binned SAH, front-to-back). Neither is trusted blindly: before its first use, the
+//! reference's answers are checked against f64 brute force ([`arbitrate`]) on every ray when
+//! rays × spheres ≤ [`ARBITRATION_BUDGET`], else on at least [`SAMPLE_MIN`] rays evenly strided over the set
+//! ([`sample`]); the count is recorded as `reference_checked`, and an answer f64 does not accept fails every
+//! configuration validated against that reference (`wrong_side = reference`).
+//!
+//! A backend's answer *disagrees* with the reference's when hit/miss (or occlusion) differs, or a hit's `t`
+//! differs by more than [`t_tolerance`]: 1e-4 relative, with a floor for hits very near the ray origin (a
+//! bounce that starts inside an overlapping sphere), where a relative bound is meaningless: both distances
+//! are computed from f32 coordinates of the origin's magnitude, so the floor is [`ORIGIN_ULPS`] ulps of that
+//! magnitude (in units of the direction's length). Primitive ids are not compared (overlapping spheres may
+//! tie). Every disagreement is decided by f64 brute force: when both answers are acceptable (the ray grazes
+//! the deciding sphere within the f32 rounding bound of the ray-sphere test, or the distance lies within its
+//! root bound; see [`tracer::geometry::ExactTest`]) it is tolerated and counted as `grazing`; otherwise it
+//! counts in `mismatches`, and `wrong_side` says whose answers f64 showed wrong (`backend`, `reference` or
+//! `both`). Validation passes (`exact`) when `mismatches` is 0. More disagreements than one sample's worth
+//! are arbitrated on an evenly strided sample of that size; the rest count as mismatches.
+
+// `run/arbitrate.rs`, declared here so that `run/mod.rs` (edited concurrently) need not change.
+#[path = "arbitrate.rs"]
+pub mod arbitrate;
 
 use std::collections::HashMap;
 use std::sync::Arc;
 
 use schema::{SceneName, Settings};
-use tracer::accel::{AccelKind, BvhParams, FlatBvh, List, Split, Traversal};
+use tracer::accel::{AccelKind, BvhParams, FlatBvh, Hit, List, Split, Traversal};
 use tracer::counters::NoCounters;
 use tracer::executor::Strategy;
+use tracer::geometry::Ray;
 use tracer::rays::{RayAnswers, RayKind, RaySet, trace};
 use tracer::render::PrimaryHits;
 
 use super::measure::make_scene;
+use arbitrate::{Exact64, RayCandidates, Verdict};
 use tracer::scene::Scene;
 
 /// Largest scene validated against brute force.
@@ -29,6 +48,12 @@ pub const T_TOLERANCE: f32 = 1e-4;
 /// Floor of the distance tolerance, in ulps of the ray origin's largest coordinate.
 pub const ORIGIN_ULPS: f32 = 8.0;
 
+/// Rays × spheres up to which f64 brute force checks every ray of a set (about 2 s on one core).
+pub const ARBITRATION_BUDGET: u64 = 2_000_000_000;
+
+/// Fewest rays f64 brute force checks (or arbitrates) in a set, when not all of them.
+pub const SAMPLE_MIN: usize = 16_384;
+
 /// Largest accepted `|t - t_reference|` for a hit at `t` along `ray`.
 pub fn t_tolerance(ray: &tracer::geometry::Ray, t: f32) -> f32 {
     let floor = ORIGIN_ULPS * f32::EPSILON * ray.origin.abs().max_element().max(1.0) / ray.dir.length();
@@ -36,36 +61,157 @@ pub fn t_tolerance(ray: &tracer::geometry::Ray, t: f32) -> f32 {
 }
 
 /// The trusted tree for larger scenes.
-fn reference_params() -> BvhParams {
+pub(crate) fn reference_params() -> BvhParams {
     BvhParams { split: Split::BinnedSah, traversal: Traversal::FrontToBack, ..BvhParams::default() }
 }
 
-/// Number of rays of `set` whose answers disagree.
-pub fn mismatches(set: &RaySet, reference: &RayAnswers, got: &RayAnswers) -> usize {
+/// Indices of the rays of `set` whose answers disagree (`None` when the answers are not comparable: another
+/// kind or count).
+pub fn disagreements(set: &RaySet, reference: &RayAnswers, got: &RayAnswers) -> Option<Vec<usize>> {
     match (reference, got) {
-        (RayAnswers::Closest(want), RayAnswers::Closest(got)) if want.len() == got.len() => want
-            .iter()
-            .zip(got)
-            .zip(&set.rays)
-            .filter(|((w, g), ray)| {
-                let (w_hit, g_hit) = (w.prim != PrimaryHits::MISS.prim, g.prim != PrimaryHits::MISS.prim);
-                w_hit != g_hit || (w_hit && (g.t - w.t).abs() > t_tolerance(ray, w.t))
-            })
-            .count(),
+        (RayAnswers::Closest(want), RayAnswers::Closest(got)) if want.len() == got.len() => Some(
+            want.iter()
+                .zip(got)
+                .zip(&set.rays)
+                .enumerate()
+                .filter(|(_, ((w, g), ray))| {
+                    let (w_hit, g_hit) = (w.prim != PrimaryHits::MISS.prim, g.prim != PrimaryHits::MISS.prim);
+                    w_hit != g_hit || (w_hit && (g.t - w.t).abs() > t_tolerance(ray, w.t))
+                })
+                .map(|(i, _)| i)
+                .collect(),
+        ),
         (RayAnswers::Occluded(want), RayAnswers::Occluded(got)) if want.len() == got.len() => {
-            want.iter().zip(got).filter(|(w, g)| w != g).count()
+            Some(want.iter().zip(got).enumerate().filter(|(_, (w, g))| w != g).map(|(i, _)| i).collect())
         }
-        _ => usize::MAX,
+        _ => None,
     }
+}
+
+/// How many of `rays` rays f64 brute force over `spheres` spheres checks: all within [`ARBITRATION_BUDGET`],
+/// else `max(SAMPLE_MIN, budget / spheres)`.
+pub fn sample_size(rays: usize, spheres: usize) -> usize {
+    if rays as u64 * spheres as u64 <= ARBITRATION_BUDGET {
+        rays
+    } else {
+        SAMPLE_MIN.max((ARBITRATION_BUDGET / spheres.max(1) as u64) as usize).min(rays)
+    }
+}
+
+/// `k` of the indices `0..n`, evenly strided (all of them when `k ≥ n`).
+pub fn sample(n: usize, k: usize) -> Vec<usize> {
+    let k = k.min(n);
+    (0..k).map(|i| (i as u128 * n as u128 / k as u128) as usize).collect()
+}
+
+/// Answer `i` of `answers` judged by f64 brute force (`c`: ray `i`'s candidates).
+fn judge_one(c: &RayCandidates, answers: &RayAnswers, i: usize) -> Verdict {
+    match answers {
+        RayAnswers::Closest(hits) => {
+            let h: Hit = hits[i];
+            let answer = (h.prim != PrimaryHits::MISS.prim).then_some(h.t);
+            c.closest(answer, |t| t_tolerance(&c.ray, t as f32) as f64)
+        }
+        RayAnswers::Occluded(flags) => c.occluded(flags[i]),
+    }
+}
+
+/// A ray set, the reference's answers, and what f64 brute force found of them.
+#[derive(Debug)]
+pub struct Reference {
+    /// The rays.
+    pub set: Arc<RaySet>,
+    /// The reference's answers.
+    pub answers: Arc<RayAnswers>,
+    /// The reference's name (`list` or `flat-bvh`).
+    pub name: &'static str,
+    /// The scene's spheres, for f64 brute force.
+    pub exact: Arc<Exact64>,
+    /// Rays whose reference answer f64 brute force checked.
+    pub checked: usize,
+    /// Those of them it did not accept.
+    pub wrong: Vec<usize>,
+}
+
+impl Reference {
+    /// Checks `answers` against f64 brute force on [`sample_size`] rays of `set`.
+    pub fn check(set: Arc<RaySet>, answers: Arc<RayAnswers>, name: &'static str, exact: Arc<Exact64>) -> Self {
+        let picked = sample(set.rays.len(), sample_size(set.rays.len(), exact.len()));
+        let rays: Vec<Ray> = picked.iter().map(|&i| set.rays[i]).collect();
+        let found = exact.candidates(&rays);
+        let wrong = picked
+            .iter()
+            .zip(&found)
+            .filter(|(i, c)| !judge_one(c, &answers, **i).acceptable())
+            .map(|(i, _)| *i)
+            .collect();
+        Self { set, answers, name, exact, checked: picked.len(), wrong }
+    }
+}
+
+/// What validation found: disagreements with the reference that f64 brute force did not accept
+/// (`mismatches`) and those it tolerated (`grazing`), the reference's own check, and who was wrong.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Judgement {
+    pub mismatches: usize,
+    pub grazing: usize,
+    pub reference_checked: usize,
+    /// `-`, `backend`, `reference` or `both`.
+    pub wrong_side: &'static str,
+}
+
+/// A backend's answers `got` judged against `reference`, disagreements arbitrated by f64 brute force (see the
+/// module documentation).
+pub fn judge(reference: &Reference, got: &RayAnswers) -> Judgement {
+    let n = reference.set.rays.len();
+    let Some(disagree) = disagreements(&reference.set, &reference.answers, got) else {
+        let wrong_side = if reference.wrong.is_empty() { "backend" } else { "both" };
+        return Judgement { mismatches: n.max(1), grazing: 0, reference_checked: reference.checked, wrong_side };
+    };
+    let cap = sample_size(n, reference.exact.len());
+    let (mut rays, unjudged) = if disagree.len() > cap {
+        (sample(disagree.len(), cap).into_iter().map(|k| disagree[k]).collect(), disagree.len() - cap)
+    } else {
+        (disagree.clone(), 0)
+    };
+    rays.extend(&reference.wrong);
+    rays.sort_unstable();
+    rays.dedup();
+    let found = reference.exact.candidates(&rays.iter().map(|&i| reference.set.rays[i]).collect::<Vec<_>>());
+    let (mut mismatches, mut grazing, mut backend_wrong, mut reference_wrong) = (unjudged, 0, false, false);
+    for (&i, c) in rays.iter().zip(&found) {
+        let backend_ok = judge_one(c, got, i).acceptable();
+        let reference_ok = judge_one(c, &reference.answers, i).acceptable();
+        if backend_ok && reference_ok {
+            grazing += 1;
+        } else {
+            mismatches += 1;
+            backend_wrong |= !backend_ok;
+            reference_wrong |= !reference_ok;
+        }
+    }
+    let wrong_side = match (backend_wrong || (unjudged > 0 && !reference_wrong), reference_wrong) {
+        (false, false) => "-",
+        (true, false) => "backend",
+        (false, true) => "reference",
+        (true, true) => "both",
+    };
+    Judgement { mismatches, grazing, reference_checked: reference.checked, wrong_side }
 }
 
 /// A scene's identity for caching: scene source, objects, seed and image size.
 type SceneKey = (String, u64, u64, u32, u32);
 
-/// Ray sets and reference answers, generated once per scene and ray kind.
+/// A ray set with its reference answers and the reference's name.
+type Entry = (Arc<RaySet>, Arc<RayAnswers>, &'static str);
+
+/// Ray sets and reference answers, generated once per scene and ray kind; the reference's check against f64
+/// brute force, made once per scene and ray kind when first asked for.
 #[derive(Default)]
 pub struct RayBank {
-    sets: HashMap<(SceneKey, RayKind), (Arc<RaySet>, Arc<RayAnswers>, &'static str)>,
+    sets: HashMap<(SceneKey, RayKind), Entry>,
+    spheres: HashMap<SceneKey, Arc<Exact64>>,
+    checked: HashMap<(SceneKey, RayKind), Arc<Reference>>,
 }
 
 impl RayBank {
@@ -78,30 +224,39 @@ impl RayBank {
     }
 
     /// The ray set of kind `kind` for the scene of `s`, its reference answers and the reference's name.
-    pub fn get(
-        &mut self,
-        s: &Settings,
-        file: Option<&Scene>,
-        kind: RayKind,
-    ) -> (Arc<RaySet>, Arc<RayAnswers>, &'static str) {
-        self.sets
-            .entry((Self::key(s, file), kind))
-            .or_insert_with(|| {
-                let scene = make_scene(s, file);
-                let (set, answers, name) = if scene.spheres.len() <= BRUTE_FORCE_MAX {
-                    let list = List::build(&scene.spheres);
-                    let set = generate(kind, &scene, s.seed);
-                    let answers = trace::<_, NoCounters>(&list, &set, &Strategy::SERIAL).0;
-                    (set, answers, AccelKind::List.name())
-                } else {
-                    let tree = FlatBvh::build(&scene.spheres, &reference_params());
-                    let set = generate(kind, &scene, s.seed);
-                    let answers = trace::<_, NoCounters>(&tree, &set, &Strategy::SERIAL).0;
-                    (set, answers, AccelKind::FlatBvh.name())
-                };
-                (Arc::new(set), Arc::new(answers), name)
-            })
-            .clone()
+    pub fn get(&mut self, s: &Settings, file: Option<&Scene>, kind: RayKind) -> Entry {
+        let key = Self::key(s, file);
+        if let Some(entry) = self.sets.get(&(key.clone(), kind)) {
+            return entry.clone();
+        }
+        let scene = make_scene(s, file);
+        let (set, answers, name) = if scene.spheres.len() <= BRUTE_FORCE_MAX {
+            let list = List::build(&scene.spheres);
+            let set = generate(kind, &scene, s.seed);
+            let answers = trace::<_, NoCounters>(&list, &set, &Strategy::SERIAL).0;
+            (set, answers, AccelKind::List.name())
+        } else {
+            let tree = FlatBvh::build(&scene.spheres, &reference_params());
+            let set = generate(kind, &scene, s.seed);
+            let answers = trace::<_, NoCounters>(&tree, &set, &Strategy::SERIAL).0;
+            (set, answers, AccelKind::FlatBvh.name())
+        };
+        self.spheres.entry(key.clone()).or_insert_with(|| Arc::new(Exact64::new(&scene.spheres)));
+        let entry = (Arc::new(set), Arc::new(answers), name);
+        self.sets.insert((key, kind), entry.clone());
+        entry
+    }
+
+    /// [`RayBank::get`]'s set and answers with the reference's check against f64 brute force.
+    pub fn reference(&mut self, s: &Settings, file: Option<&Scene>, kind: RayKind) -> Arc<Reference> {
+        let key = (Self::key(s, file), kind);
+        if let Some(checked) = self.checked.get(&key) {
+            return checked.clone();
+        }
+        let (set, answers, name) = self.get(s, file, kind);
+        let reference = Arc::new(Reference::check(set, answers, name, self.spheres[&key.0].clone()));
+        self.checked.insert(key, reference.clone());
+        reference
     }
 }
 
@@ -116,27 +271,85 @@ pub fn generate(kind: RayKind, scene: &tracer::scene::Scene, seed: u64) -> RaySe
 mod tests {
     use super::*;
     use tracer::Vec3;
-    use tracer::accel::Hit;
-    use tracer::geometry::Ray;
 
     fn set(rays: Vec<Ray>) -> RaySet {
         RaySet { kind: RayKind::Primary, rays }
     }
 
     #[test]
-    fn mismatches_count_hit_miss_and_distance_disagreements() {
+    fn disagreements_are_hit_miss_and_distance_differences() {
         let rays = set(vec![Ray::new(Vec3::ZERO, Vec3::Z); 4]);
         let hit = |t| Hit { t, prim: 1 };
         let want = RayAnswers::Closest(vec![hit(10.0), hit(10.0), PrimaryHits::MISS, hit(10.0)]);
         let got = RayAnswers::Closest(vec![hit(10.0005), hit(10.01), hit(3.0), Hit { t: 10.0, prim: 7 }]);
         assert_eq!(
-            mismatches(&rays, &want, &got),
-            2,
+            disagreements(&rays, &want, &got),
+            Some(vec![1, 2]),
             "1e-4 relative passes, 1e-3 fails, hit vs miss fails, ids ignored"
         );
         let flags = |v: &[bool]| RayAnswers::Occluded(v.to_vec());
-        assert_eq!(mismatches(&rays, &flags(&[true, false, true, true]), &flags(&[true, true, true, false])), 2);
-        assert_eq!(mismatches(&rays, &flags(&[true]), &want), usize::MAX);
+        assert_eq!(
+            disagreements(&rays, &flags(&[true, false, true, true]), &flags(&[true, true, true, false])),
+            Some(vec![1, 3])
+        );
+        assert_eq!(disagreements(&rays, &flags(&[true]), &want), None);
+    }
+
+    #[test]
+    fn samples_are_all_rays_within_the_budget_else_strided() {
+        assert_eq!(sample_size(49_152, 10_000), 49_152);
+        assert_eq!(sample_size(786_432, 10_000), 200_000);
+        assert_eq!(sample_size(786_432, 1_000_000), SAMPLE_MIN);
+        assert_eq!(sample_size(100, 1_000_000), 100);
+        assert_eq!(sample(10, 4), vec![0, 2, 5, 7]);
+        assert_eq!(sample(3, 8), vec![0, 1, 2]);
+    }
+
+    /// One sphere; ray 0 hits it squarely, ray 1 exactly tangent (f32 brute force hits it), ray 2 misses it by
+    /// 1e-3 of its radius.
+    fn tangent_case() -> (Arc<RaySet>, Arc<RayAnswers>, Arc<Exact64>) {
+        let spheres = [tracer::geometry::Sphere::new(Vec3::new(0.0, 0.0, -10.0), 1.0)];
+        let rays = vec![
+            Ray::new(Vec3::ZERO, -Vec3::Z),
+            Ray::new(Vec3::new(1.0, 0.0, 0.0), -Vec3::Z),
+            Ray::new(Vec3::new(1.001, 0.0, 0.0), -Vec3::Z),
+        ];
+        let set = set(rays);
+        let answers = trace::<_, NoCounters>(&List::build(&spheres), &set, &Strategy::SERIAL).0;
+        (Arc::new(set), Arc::new(answers), Arc::new(Exact64::new(&spheres)))
+    }
+
+    #[test]
+    fn f64_tolerates_grazing_disagreements_and_names_the_wrong_side() {
+        let (set, answers, exact) = tangent_case();
+        let reference = Reference::check(set, answers, "list", exact);
+        assert_eq!((reference.checked, reference.wrong.len()), (3, 0));
+        let hit = |t| Hit { t, prim: 0 };
+        let miss = PrimaryHits::MISS;
+        let judged = |got: Vec<Hit>| judge(&reference, &RayAnswers::Closest(got));
+        let ok = Judgement { mismatches: 0, grazing: 0, reference_checked: 3, wrong_side: "-" };
+        assert_eq!(judged(vec![hit(9.0), hit(10.0), miss]), ok);
+        assert_eq!(judged(vec![hit(9.0), miss, miss]), Judgement { grazing: 1, ..ok.clone() }, "tangent: tolerated");
+        let backend = Judgement { mismatches: 1, wrong_side: "backend", ..ok.clone() };
+        assert_eq!(judged(vec![hit(9.0), hit(10.0), hit(10.0)]), backend, "a real miss");
+        assert_eq!(judged(vec![hit(9.1), hit(10.0), miss]), backend, "a distance off by 1e-2");
+        assert_eq!(judged(vec![miss, hit(10.0), miss]), backend);
+        let flags = RayAnswers::Occluded(vec![true; 3]);
+        assert_eq!(judge(&reference, &flags).wrong_side, "backend", "not comparable");
+    }
+
+    #[test]
+    fn a_wrong_reference_fails_validation() {
+        let (set, _, exact) = tangent_case();
+        let wrong =
+            Arc::new(RayAnswers::Closest(vec![Hit { t: 9.0, prim: 0 }, PrimaryHits::MISS, Hit { t: 10.0, prim: 0 }]));
+        let reference = Reference::check(set, wrong, "list", exact);
+        assert_eq!(reference.wrong, vec![2], "the tangent miss is acceptable, the hit by 1e-3 is not");
+        let right = RayAnswers::Closest(vec![Hit { t: 9.0, prim: 0 }, Hit { t: 10.0, prim: 0 }, PrimaryHits::MISS]);
+        let got = judge(&reference, &right);
+        assert_eq!((got.mismatches, got.grazing, got.wrong_side), (1, 1, "reference"));
+        let agrees = judge(&reference, &reference.answers);
+        assert_eq!((agrees.mismatches, agrees.wrong_side), (1, "both"), "agreeing with a wrong reference");
     }
 
     #[test]

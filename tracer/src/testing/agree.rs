@@ -2,7 +2,7 @@
 
 use crate::accel::{AccelVisitor, Accelerator, BuiltAccel, Hit, List};
 use crate::counters::NoCounters;
-use crate::geometry::{Ray, Sphere};
+use crate::geometry::{ExactTest, Ray, Sphere};
 
 use super::every_tree;
 
@@ -16,8 +16,8 @@ pub enum Tolerance {
     RelativeToT,
     /// `|t - t_bf| <= 1e-4 * max(|t_bf|, scale)`, where `scale = (|o - c| + r) / |d|` is the hit sphere's distance
     /// scale (a ray-sphere root's rounding error scales with the operands, not with `t`); and a hit/miss or
-    /// occlusion disagreement on a ray that grazes a sphere within [`GRAZING`] of tangent is excused (printed,
-    /// not failed). For backends with their own ray-sphere test.
+    /// occlusion disagreement on a ray that grazes a sphere within the f32 rounding bound of [`Sphere::intersect`]
+    /// (`|g| ≤ B`, [`ExactTest`]) is excused (printed, not failed). For backends with their own ray-sphere test.
     RelativeToScale,
 }
 
@@ -40,17 +40,12 @@ impl Tolerance {
     }
 }
 
-/// How near tangent (`|perp / r - 1|`, about two f32 ulps of the radius) f32 cannot tell a hit from a miss.
-pub const GRAZING: f64 = 2.5e-7;
-
-/// How far from tangent the ray's line passes sphere `s`, `|perp / r - 1|` in f64, if it grazes it ahead of
-/// the origin within [`GRAZING`].
+/// How far from tangent the ray's line passes sphere `s` (`|g|`, `g = (r² − p²) / r²` in f64), if it grazes it
+/// ahead of the origin within the f32 rounding bound `B` of [`Sphere::intersect`], where f32 cannot tell a hit
+/// from a miss ([`ExactTest::is_grazing`]).
 fn grazing_offset(s: &Sphere, ray: &Ray) -> Option<f64> {
-    let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
-    let f = o - s.center.as_dvec3();
-    let t_closest = -f.dot(d) / d.dot(d);
-    let rel = ((f + d * t_closest).length() / s.radius as f64 - 1.0).abs();
-    (rel < GRAZING && t_closest > ray.t_min as f64).then_some(rel)
+    let e = ExactTest::new(s, ray);
+    (e.is_grazing() && e.t_closest > ray.t_min as f64).then_some(e.g.abs())
 }
 
 /// The first sphere the ray grazes (see [`grazing_offset`]) and its offset from tangent.
@@ -159,7 +154,7 @@ impl Comparison<'_, '_> {
     fn record(&mut self, i: usize, grazing: Option<(usize, f64)>, text: String) {
         let ray = &self.reference.rays[i];
         match grazing {
-            Some((s, rel)) => self.excused.push(format!("ray {i} {ray:?} grazes sphere {s} ({rel:.1e}): {text}")),
+            Some((s, rel)) => self.excused.push(format!("ray {i} {ray:?} grazes sphere {s} (|g| = {rel:.1e}): {text}")),
             None => self.bad.push(format!("ray {i} {ray:?}: {text}")),
         }
     }
@@ -170,7 +165,7 @@ impl Comparison<'_, '_> {
         let Self { what, tol, bad, excused, reference, .. } = self;
         if !excused.is_empty() {
             eprintln!(
-                "{what}: {} hit/miss disagreement(s) on rays within {GRAZING:e} of tangent (excused):\n  {}",
+                "{what}: {} hit/miss disagreement(s) on rays grazing a sphere within f32's rounding bound (excused):\n  {}",
                 excused.len(),
                 excused.join("\n  ")
             );

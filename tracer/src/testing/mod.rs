@@ -14,7 +14,7 @@
 mod agree;
 mod rays;
 
-pub use agree::{Comparison, GRAZING, Reference, Tolerance, assert_every_tree_agrees};
+pub use agree::{Comparison, Reference, Tolerance, assert_every_tree_agrees};
 pub use rays::{scene_ray_mix, sphere_ray_mix};
 
 use crate::accel::{AccelKind, AccelParams, BvhParams, Split, Traversal};
