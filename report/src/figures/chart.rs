@@ -5,7 +5,8 @@ use std::sync::Once;
 
 use plotters::coord::Shift;
 use plotters::coord::combinators::BindKeyPoints;
-use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
+use plotters::coord::ranged1d::{AsRangedCoord, DefaultFormatting, KeyPointHint, ValueFormatter};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
@@ -65,20 +66,104 @@ fn register_font() {
     });
 }
 
+/// What a figure over commits adds to a chart: whole-number x ticks with labels, unjoined marks and
+/// vertical rules.
+#[derive(Clone, Debug, Default)]
+pub struct Overlay {
+    /// Labels of whole-number x values (e.g. short commit hashes by run index). When given on a linear x
+    /// axis, the axis spans the first − 0.5 to the last + 0.5 and ticks sit only at these values (every
+    /// k-th of them when there are more than [`MAX_X_LABELS`]), labelled with their text.
+    pub x_ticks: Vec<(f64, String)>,
+    /// Sets of points drawn as marks only, never joined by a line.
+    pub marks: Vec<Marks>,
+    /// Dashed vertical lines at these x values, across the whole plot.
+    pub rules: Vec<f64>,
+}
+
+/// Points drawn with one mark and one legend entry.
+#[derive(Clone, Debug)]
+pub struct Marks {
+    pub label: String,
+    pub mark: Mark,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// How [`Marks`] look.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mark {
+    /// A thick red ×.
+    Cross,
+    /// A black ring around the point.
+    Ring,
+}
+
+/// The most x tick labels an [`Overlay`] axis gets.
+pub const MAX_X_LABELS: usize = 12;
+
 /// Draws `chart` to `svg` and to `png`; the error is a message.
 pub fn render(chart: &Chart, svg: &Path, png: &Path) -> Result<(), (std::path::PathBuf, String)> {
+    render_with(chart, &Overlay::default(), svg, png)
+}
+
+/// Draws `chart` with `overlay` to `svg` and to `png`; the error is a message.
+pub fn render_with(
+    chart: &Chart,
+    overlay: &Overlay,
+    svg: &Path,
+    png: &Path,
+) -> Result<(), (std::path::PathBuf, String)> {
     register_font();
-    draw_any(SVGBackend::new(svg, SIZE).into_drawing_area(), chart).map_err(|e| (svg.to_path_buf(), e))?;
-    draw_any(BitMapBackend::new(png, SIZE).into_drawing_area(), chart).map_err(|e| (png.to_path_buf(), e))?;
+    draw_any(SVGBackend::new(svg, SIZE).into_drawing_area(), chart, overlay).map_err(|e| (svg.to_path_buf(), e))?;
+    draw_any(BitMapBackend::new(png, SIZE).into_drawing_area(), chart, overlay).map_err(|e| (png.to_path_buf(), e))?;
     Ok(())
 }
 
+/// The labelled ticks of an overlay's x axis: every k-th, k the smallest step that keeps them to
+/// [`MAX_X_LABELS`], counted from the first.
+fn shown_ticks(ticks: &[(f64, String)]) -> Vec<(f64, String)> {
+    let step = ticks.len().div_ceil(MAX_X_LABELS).max(1);
+    ticks.iter().step_by(step).cloned().collect()
+}
+
+/// A linear axis with given bold (labelled) and light tick values: plotters' `WithKeyPoints` over a linear
+/// range has no default formatter, which the chart's generic drawing asks for.
+struct WholeTicks {
+    inner: RangedCoordf64,
+    bold: Vec<f64>,
+    light: Vec<f64>,
+}
+
+impl Ranged for WholeTicks {
+    type FormatOption = DefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        self.inner.map(value, limit)
+    }
+
+    fn key_points<Hint: KeyPointHint>(&self, hint: Hint) -> Vec<f64> {
+        if hint.weight().allow_light_points() { self.light.clone() } else { self.bold.clone() }
+    }
+
+    fn range(&self) -> std::ops::Range<f64> {
+        self.inner.range()
+    }
+}
+
 /// Picks linear or logarithmic axes and draws.
-fn draw_any<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart) -> Result<(), String>
+fn draw_any<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart, overlay: &Overlay) -> Result<(), String>
 where
     DB::ErrorType: 'static,
 {
-    let (x0, x1) = range(chart.lines.iter().flat_map(|l| l.points.iter().map(|p| p.x)), chart.log_x, false);
+    let xs = chart.lines.iter().flat_map(|l| l.points.iter().map(|p| p.x));
+    let labelled = !chart.log_x && !overlay.x_ticks.is_empty();
+    let (x0, x1) = if labelled {
+        let ticks = overlay.x_ticks.iter().map(|t| t.0);
+        let (lo, hi) = ticks.chain(xs).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+        (lo - 0.5, hi + 0.5)
+    } else {
+        range(xs, chart.log_x, false)
+    };
     let ys = chart.lines.iter().flat_map(|l| l.points.iter().flat_map(|p| [p.y, p.lo, p.hi]));
     let (y0, y1) = range(ys.chain(chart.guide.as_ref().map(|g| g.0)), chart.log_y, true);
     // Log axes get their own 1-2-5 ticks: plotters' defaults label too few or overlapping values.
@@ -86,11 +171,20 @@ where
         (lo..hi).log_scale().with_key_points(log_ticks(lo, hi, false)).with_light_points(log_ticks(lo, hi, true))
     };
     let corner = legend_corner(chart, (x0, x1), (y0, y1));
+    // Whole-number x ticks: bold (labelled) at the shown ones, light at every labelled value (up to 100).
+    let whole = || WholeTicks {
+        inner: (x0..x1).into(),
+        bold: shown_ticks(&overlay.x_ticks).into_iter().map(|t| t.0).collect(),
+        light: if overlay.x_ticks.len() <= 100 { overlay.x_ticks.iter().map(|t| t.0).collect() } else { vec![] },
+    };
+    let o = overlay;
     match (chart.log_x, chart.log_y) {
-        (false, false) => draw(root, chart, corner, x0..x1, y0..y1),
-        (true, false) => draw(root, chart, corner, log(x0, x1), y0..y1),
-        (false, true) => draw(root, chart, corner, x0..x1, log(y0, y1)),
-        (true, true) => draw(root, chart, corner, log(x0, x1), log(y0, y1)),
+        (false, false) if labelled => draw(root, chart, o, corner, whole(), y0..y1),
+        (false, true) if labelled => draw(root, chart, o, corner, whole(), log(y0, y1)),
+        (false, false) => draw(root, chart, o, corner, x0..x1, y0..y1),
+        (true, false) => draw(root, chart, o, corner, log(x0, x1), y0..y1),
+        (false, true) => draw(root, chart, o, corner, x0..x1, log(y0, y1)),
+        (true, true) => draw(root, chart, o, corner, log(x0, x1), log(y0, y1)),
     }
 }
 
@@ -194,9 +288,31 @@ fn marker(kind: usize) -> Vec<(i32, i32)> {
     }
 }
 
+/// The two strokes of a [`Mark`] around (0, 0) in pixels.
+fn mark_shape(mark: Mark) -> [(Vec<(i32, i32)>, ShapeStyle); 2] {
+    match mark {
+        Mark::Cross => {
+            let red = RGBColor(200, 0, 0).stroke_width(4);
+            [(vec![(-9, -9), (9, 9)], red), (vec![(-9, 9), (9, -9)], red)]
+        }
+        Mark::Ring => {
+            let ring: Vec<(i32, i32)> = (0..=24)
+                .map(|i| {
+                    let a = i as f64 * std::f64::consts::TAU / 24.0;
+                    ((11.0 * a.cos()).round() as i32, (11.0 * a.sin()).round() as i32)
+                })
+                .collect();
+            // One closed path, drawn in two halves.
+            let (first, second) = (ring[..=12].to_vec(), ring[12..].to_vec());
+            [(first, BLACK.stroke_width(3)), (second, BLACK.stroke_width(3))]
+        }
+    }
+}
+
 fn draw<DB, X, Y>(
     root: DrawingArea<DB, Shift>,
     chart: &Chart,
+    overlay: &Overlay,
     legend: SeriesLabelPosition,
     x: X,
     y: Y,
@@ -219,12 +335,16 @@ where
         .build_cartesian_2d(x, y)
         .map_err(e)?;
     let format = |v: &f64| tick(*v);
+    let x_format = |v: &f64| match overlay.x_ticks.iter().find(|t| (t.0 - v).abs() < 1e-6) {
+        Some(t) => t.1.clone(),
+        None => tick(*v),
+    };
     cc.configure_mesh()
         .x_desc(chart.x_label.as_str())
         .y_desc(chart.y_label.as_str())
         .axis_desc_style((FONT, 24))
         .label_style((FONT, 20))
-        .x_label_formatter(&format)
+        .x_label_formatter(&x_format)
         .y_label_formatter(&format)
         .light_line_style(RGBColor(235, 235, 235))
         .bold_line_style(RGBColor(200, 200, 200))
@@ -238,6 +358,14 @@ where
             .map_err(e)?
             .label(label.as_str())
             .legend(move |(lx, ly)| PathElement::new([(lx, ly), (lx + 10, ly), (lx + 16, ly), (lx + 26, ly)], style));
+    }
+
+    // Rules first, behind the data.
+    if !overlay.rules.is_empty() {
+        let (y0, y1) = (cc.y_range().start, cc.y_range().end);
+        let style = RGBColor(90, 90, 90).stroke_width(2);
+        cc.draw_series(overlay.rules.iter().flat_map(|&x| DashedLineSeries::new([(x, y0), (x, y1)], 10, 6, style)))
+            .map_err(e)?;
     }
 
     for line in &chart.lines {
@@ -267,6 +395,21 @@ where
         });
     }
 
+    for marks in overlay.marks.iter().filter(|m| !m.points.is_empty()) {
+        let [(a, a_style), (b, b_style)] = mark_shape(marks.mark);
+        let (la, lb) = (a.clone(), b.clone());
+        cc.draw_series(marks.points.iter().map(|&at| {
+            EmptyElement::at(at) + PathElement::new(a.clone(), a_style) + PathElement::new(b.clone(), b_style)
+        }))
+        .map_err(e)?
+        .label(marks.label.as_str())
+        .legend(move |(lx, ly)| {
+            EmptyElement::at((lx + 13, ly))
+                + PathElement::new(la.clone(), a_style)
+                + PathElement::new(lb.clone(), b_style)
+        });
+    }
+
     cc.configure_series_labels()
         .position(legend)
         .label_font((FONT, 20))
@@ -291,6 +434,18 @@ mod tests {
         assert_eq!(tick(2.0), "2");
         assert_eq!(tick(0.0), "0");
         assert_eq!(tick(1e8), "1e8");
+    }
+
+    #[test]
+    fn overlay_ticks_are_thinned_to_fit() {
+        let ticks = |n: usize| (1..=n).map(|i| (i as f64, format!("c{i}"))).collect::<Vec<_>>();
+        let xs = |n: usize| shown_ticks(&ticks(n)).iter().map(|t| t.0).collect::<Vec<_>>();
+        assert_eq!(xs(3), [1.0, 2.0, 3.0]);
+        assert_eq!(xs(MAX_X_LABELS).len(), MAX_X_LABELS);
+        assert_eq!(xs(14), [1.0, 3.0, 5.0, 7.0, 9.0, 11.0, 13.0]);
+        assert_eq!(xs(100).len(), 12);
+        assert!(xs(1000).len() <= MAX_X_LABELS);
+        assert!(shown_ticks(&[]).is_empty());
     }
 
     #[test]
