@@ -35,11 +35,17 @@ pub struct Run {
 impl Run {
     fn new(row: Row) -> Run {
         let cells: Vec<Cell> = COLUMNS.iter().map(|c| row.cell(c.name).expect("declared column")).collect();
-        Run { text: cells.iter().map(|c| c.to_string()).collect(), num: cells.iter().map(Cell::number).collect(), row }
+        let mut num: Vec<f64> = cells.iter().map(Cell::number).collect();
+        // `threads` reads as a number of threads used (`all` resolved), as a figure axis or a claim needs it.
+        if row.threads_used > 0 {
+            num[index_of(schema::Axis::threads.key()).expect("declared column")] = f64::from(row.threads_used);
+        }
+        Run { text: cells.iter().map(|c| c.to_string()).collect(), num, row }
     }
 
     /// True when the run's setting columns take one of the allowed values for every filter entry
-    /// (`threads = "all"`: the logical cores of the machine that recorded the row).
+    /// (`threads = "all"` also matches rows recorded before `all` stayed symbolic, whose `threads` holds the
+    /// logical cores of the machine that recorded them).
     pub fn passes(&self, filter: &[(String, Vec<String>)]) -> bool {
         let threads_all = |column: &str, a: &str| {
             column == schema::Axis::threads.key()

@@ -40,7 +40,8 @@ declare_columns! {
         traversal: Option<Traversal> = Some(BvhParams::default().traversal), applies tree else None;
         /// Parallel strategy.
         strategy: StrategyKind = StrategyKind::Serial;
-        /// Worker threads actually used (`all` in a config: the machine's logical cores; 1 for serial).
+        /// Worker threads as configured: a count, or `all` (the machine's logical cores, resolved into `threads_used`,
+        /// so the configuration id is the same on every machine); 1 for serial.
         threads: Threads = Threads::All, range(1, 4096), applies parallel else Threads::Count(1);
         /// Image width.
         width: u32 = 320, range(1, 16384), unit "px";
@@ -111,6 +112,9 @@ declare_columns! {
         cpu_model: String, Provenance;
         /// Logical cores of the machine.
         logical_cores: u32, Provenance;
+        /// Worker threads the run used: `threads` with `all` resolved to the machine's logical cores (0: recorded
+        /// before this column, when `threads` held the resolved count).
+        threads_used: u32, Provenance, added 2;
         /// 1-minute load average just before the run.
         load_avg_1m: f64, Provenance, decimals 2;
         /// RFC 3339 UTC time the run started.

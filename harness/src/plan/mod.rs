@@ -24,7 +24,10 @@ pub struct Configuration {
     /// 16 hex digits: see [`schema::row::config_id`].
     pub id: String,
     pub series: String,
+    /// The settings it runs with (`threads = "all"` resolved to the planning machine's cores).
     pub settings: Settings,
+    /// The threads as configured (`all` stays `all`, as in the id and the row's `threads` column).
+    pub threads: Threads,
 }
 
 /// One execution: a configuration and its repetition index (`None` for a warm-up, which is not recorded).
@@ -72,13 +75,12 @@ fn product(lists: &[Vec<AxisValue>]) -> Vec<Vec<AxisValue>> {
     })
 }
 
-/// The settings of one combination: `threads` resolved for `cores`, normalized, a sphere file's count as objects.
-fn settings(values: &[AxisValue], cores: usize, file: Option<&SphereFile>) -> Settings {
+/// The settings of one combination, normalized, a sphere file's count as objects (`threads` as configured).
+fn settings(values: &[AxisValue], file: Option<&SphereFile>) -> Settings {
     let mut s = Settings::default();
     for v in values {
         s.set(v.clone());
     }
-    s.threads = Threads::Count(s.threads.resolve(cores));
     let mut s = s.normalized();
     if let (SceneName::SphereFile, Some(f)) = (s.scene, file) {
         s.objects = f.scene.spheres.len() as u64;
@@ -126,14 +128,17 @@ impl Plan {
                 if excluded {
                     continue;
                 }
-                let settings = settings(&values, cores, sphere_file.as_ref());
-                let id = schema::row::config_id(&s.label, &settings);
+                let configured = settings(&values, sphere_file.as_ref());
+                // The id is the configured settings' (machine-independent); the run resolves `all` here.
+                let id = schema::row::config_id(&s.label, &configured);
                 if seen.insert(id.clone()) {
+                    let settings =
+                        Settings { threads: Threads::Count(configured.threads.resolve(cores)), ..configured.clone() };
                     let threads = settings.strategy().threads;
                     if threads > cores {
                         above_cores.push(threads);
                     }
-                    configurations.push(Configuration { id, series: s.label.clone(), settings });
+                    configurations.push(Configuration { id, series: s.label.clone(), settings, threads: configured.threads });
                 }
             }
         }
@@ -200,6 +205,19 @@ mod tests {
         assert_eq!(p.notes.len(), 1, "threads 4 > 2 cores is flagged: {:?}", p.notes);
         let ids: HashSet<_> = p.configurations.iter().map(|c| &c.id).collect();
         assert_eq!(ids.len(), p.configurations.len());
+    }
+
+    #[test]
+    fn threads_all_stays_symbolic_in_the_id_and_is_resolved_to_run() {
+        let rayon = StrategyKind::RayonBands.name();
+        let text = format!("{BASE}[sweep]\nstrategy = \"{rayon}\"\nthreads = [\"all\", 2]\n");
+        let exp = Experiment::parse(Path::new("t.toml"), &text).unwrap();
+        let (on2, on16) = (Plan::new(&exp, 2).unwrap(), Plan::new(&exp, 16).unwrap());
+        let all = |p: &Plan| p.configurations.iter().find(|c| c.threads == Threads::All).unwrap().clone();
+        assert_eq!(all(&on2).id, all(&on16).id, "the same id on machines of 2 and 16 cores");
+        assert_eq!((all(&on2).settings.strategy().threads, all(&on16).settings.strategy().threads), (2, 16));
+        assert_eq!(on2.configurations.len(), 2, "all and 2 stay two configurations on 2 cores");
+        assert_ne!(on2.configurations[0].id, on2.configurations[1].id);
     }
 
     #[test]

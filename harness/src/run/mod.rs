@@ -147,6 +147,8 @@ fn row(
     row.rustc = p.rustc.clone();
     row.cpu_model = p.cpu_model.clone();
     row.logical_cores = p.logical_cores as u32;
+    row.threads = c.threads;
+    row.threads_used = c.settings.strategy().threads as u32;
     row.load_avg_1m = load;
     row.timestamp = timestamp;
     row.harness_version = p.harness_version.clone();
