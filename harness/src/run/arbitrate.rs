@@ -303,7 +303,7 @@ mod tests {
     use tracer::rng::SplitMix64;
     use tracer::scene::SceneKind;
 
-    use super::super::{reference_params, t_tolerance};
+    use crate::run::validate::{reference_params, t_tolerance};
 
     fn slack(ray: &Ray) -> impl Fn(f64) -> f64 + '_ {
         |t| t_tolerance(ray, t as f32) as f64
@@ -435,31 +435,6 @@ mod tests {
             assert!(m.get(ours).is_none());
             let t_ours = s.intersect(ray, f32::INFINITY).unwrap();
             assert_eq!(m.closest(Some(t_ours), slack(&moved)), Verdict::Wrong, "a real miss is not tolerated");
-        }
-    }
-
-    /// Times the reference's check against f64 brute force (16,384 primary rays at 1024×768) at 1e5 and 1e6
-    /// spheres: `cargo test --release -p harness --bin harness reference_check_timing -- --ignored --nocapture`.
-    #[test]
-    #[ignore = "a timing, not a test"]
-    fn reference_check_timing() {
-        use super::super::{Reference, generate};
-        use std::sync::Arc;
-        use tracer::executor::Strategy;
-        use tracer::rays::{RayKind, trace};
-        for n in [100_000, 1_000_000] {
-            let mut scene = SceneKind::RandomSpheres.generate(n, 1);
-            scene.camera = scene.camera.with_resolution(1024, 768);
-            for kind in [RayKind::Primary, RayKind::Shadow] {
-                let set = generate(kind, &scene, 1);
-                let tree = FlatBvh::build(&scene.spheres, &reference_params());
-                let answers = trace::<_, NoCounters>(&tree, &set, &Strategy::SERIAL).0;
-                let exact = Arc::new(Exact64::new(&scene.spheres));
-                let start = std::time::Instant::now();
-                let r = Reference::check(Arc::new(set), Arc::new(answers), "flat-bvh", exact);
-                let secs = start.elapsed().as_secs_f64();
-                eprintln!("{n} spheres, {kind:?}: {} rays checked in {secs:.2} s, {} wrong", r.checked, r.wrong.len());
-            }
         }
     }
 }

@@ -1,6 +1,7 @@
 //! Runs a plan: every planned run timed, its counters from a separate counted pass (once per
 //! configuration), one row appended and flushed per timed repetition, then the report rebuilt.
 
+pub mod arbitrate;
 mod backend;
 pub mod measure;
 pub mod provenance;

@@ -3,7 +3,7 @@
 //!
 //! The reference is f32 brute force ([`List`]) for scenes of at most [`BRUTE_FORCE_MAX`] spheres, else the
 //! tracer's flat BVH (binned SAH, front-to-back). Neither is trusted blindly: before its first use, the
-//! reference's answers are checked against f64 brute force ([`arbitrate`]) on every ray when
+//! reference's answers are checked against f64 brute force ([`super::arbitrate`]) on every ray when
 //! rays × spheres ≤ [`ARBITRATION_BUDGET`], else on at least [`SAMPLE_MIN`] rays evenly strided over the set
 //! ([`sample`]); the count is recorded as `reference_checked`, and an answer f64 does not accept fails every
 //! configuration validated against that reference (`wrong_side = reference`).
@@ -20,9 +20,6 @@
 //! `both`). Validation passes (`exact`) when `mismatches` is 0. More disagreements than one sample's worth
 //! are arbitrated on an evenly strided sample of that size; the rest count as mismatches.
 
-// `run/arbitrate.rs`, declared here so that `run/mod.rs` (edited concurrently) need not change.
-#[path = "arbitrate.rs"]
-pub mod arbitrate;
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -36,7 +33,7 @@ use tracer::rays::{RayAnswers, RayKind, RaySet, trace};
 use tracer::render::PrimaryHits;
 
 use super::measure::make_scene;
-use arbitrate::{Exact64, RayCandidates, Verdict};
+use super::arbitrate::{Exact64, RayCandidates, Verdict};
 use tracer::scene::Scene;
 
 /// Largest scene validated against brute force.
