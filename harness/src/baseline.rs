@@ -5,8 +5,9 @@ use std::path::{Path, PathBuf};
 use crate::error::Error;
 use crate::run::{CONFIG_COPY, RUNS_CSV};
 
-/// Files a baseline keeps (the rest can be rebuilt with `harness report`).
-const KEPT: &[&str] = &[RUNS_CSV, CONFIG_COPY, "summary.csv", "REPORT.md"];
+/// Files a baseline keeps (the rest can be rebuilt with `harness report`; instructions.csv where `harness
+/// instructions` counted the run).
+const KEPT: &[&str] = &[RUNS_CSV, CONFIG_COPY, "summary.csv", "REPORT.md", report::check::instructions::FILE];
 
 /// Where baselines live.
 pub fn baselines_dir() -> PathBuf {

@@ -29,8 +29,12 @@ pub enum Command {
     Render(RenderArgs),
     /// List scenes, accelerators and peer backends (with availability), splits, traversal orders and strategies.
     List,
-    /// Compare a run with a stored baseline: exact work counters, and single-thread speedups with intervals.
+    /// Compare a run with a stored baseline: exact work counters, instruction counts, and (from the same machine)
+    /// every configuration's trace and build times, flagged ones measured again; speedups for information.
     Check(CheckArgs),
+    /// Count the instructions of each single-thread configuration's build and trace under callgrind (valgrind),
+    /// into instructions.csv of the run folder: the deterministic gate of `harness check`.
+    Instructions(InstructionsArgs),
     /// Build another git revision and time both builds on a config, interleaved; report new/old ratios, and fail
     /// when the builds' answers differ.
     Ab(AbArgs),
@@ -77,7 +81,7 @@ pub struct CheckArgs {
     /// The baseline folder (e.g. results/baselines/ci).
     #[arg(long)]
     pub baseline: PathBuf,
-    /// Smallest speedup change that counts as a regression or improvement (0.10 = 10%).
+    /// Smallest change of a time or speedup that counts as a regression or improvement (0.10 = 10%).
     #[arg(long, default_value_t = 0.10)]
     pub min_effect: f64,
     /// Metric the speedups are computed from.
@@ -86,12 +90,50 @@ pub struct CheckArgs {
     /// List changed work counters without failing on them.
     #[arg(long)]
     pub accept_counter_changes: bool,
-    /// Compare speedups for information only (never fail on them): for a baseline recorded on another machine.
+    /// Compare times for information only (never fail on them), even when run and baseline come from the same
+    /// machine (another machine's are always for information).
     #[arg(long)]
     pub timings_for_information: bool,
+    /// Largest growth of a phase's instruction count that passes (0.02 = 2%).
+    #[arg(long, default_value_t = 0.02)]
+    pub instruction_threshold: f64,
+    /// Phases whose baseline median is shorter than this many seconds are compared for information only.
+    #[arg(long, default_value_t = 1e-4)]
+    pub min_time: f64,
+    /// Fail on a flagged time without measuring its configuration again.
+    #[arg(long)]
+    pub no_confirm: bool,
     /// Where to write the JSON of every measure (default: RUN_DIR/check.json).
     #[arg(long)]
     pub json: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+pub struct InstructionsArgs {
+    /// Experiment config (TOML).
+    pub config: PathBuf,
+    /// Run folder to write instructions.csv to (default: results/<name>/, or results/<name>-quick/ with --quick).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Apply the config's [quick] overrides.
+    #[arg(long)]
+    pub quick: bool,
+    /// Also simulate caches (D1 and last-level misses, recorded for information; 1.3-2.2x slower).
+    #[arg(long)]
+    pub cache_sim: bool,
+    /// Count at this image size instead of each configuration's own, e.g. 64x48.
+    #[arg(long, value_parser = parse_image)]
+    pub image: Option<(u32, u32)>,
+    /// Valgrind processes at once (default: logical cores).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=256))]
+    pub jobs: Option<u32>,
+}
+
+fn parse_image(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("{s:?} is not an image size (allowed: WxH with 1 <= W, H <= 16384, e.g. 64x48)");
+    let (w, h) = s.split_once(['x', 'X', '×']).ok_or_else(bad)?;
+    let (w, h): (u32, u32) = (w.parse().map_err(|_| bad())?, h.parse().map_err(|_| bad())?);
+    if (1..=16384).contains(&w) && (1..=16384).contains(&h) { Ok((w, h)) } else { Err(bad()) }
 }
 
 #[derive(Args, Debug)]

@@ -5,6 +5,7 @@ mod baseline;
 mod check;
 mod cli;
 mod config;
+mod count;
 mod error;
 mod list;
 mod output;
@@ -34,6 +35,14 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(&args),
         Command::Worker => worker_command(),
         Command::Check(args) => check_command(&args),
+        Command::Instructions(args) => count::run(&count::CountRequest {
+            config: &args.config,
+            quick: args.quick,
+            out: args.out.clone(),
+            cache_sim: args.cache_sim,
+            image: args.image,
+            jobs: args.jobs.map_or_else(render::available_threads, |j| j as usize),
+        }),
         Command::History(HistoryCommand::Append { run_dir, dir }) => history_append(&run_dir, &dir),
         Command::History(HistoryCommand::Plot { dir }) => report::history::plot(&dir)
             .map(|files| files.iter().for_each(|f| println!("{}", f.display())))
@@ -138,14 +147,27 @@ fn check_command(args: &CheckArgs) -> Result<(), Error> {
     if !(0.0..1.0).contains(&args.min_effect) {
         return Err(Error::Input(format!("--min-effect {}: out of range (allowed: 0 <= x < 1)", args.min_effect)));
     }
+    if !(0.0..1.0).contains(&args.instruction_threshold) {
+        return Err(Error::Input(format!(
+            "--instruction-threshold {}: out of range (allowed: 0 <= x < 1)",
+            args.instruction_threshold
+        )));
+    }
     let options = report::check::CheckOptions {
         metric: args.metric.clone(),
         min_effect: args.min_effect,
         accept_counter_changes: args.accept_counter_changes,
         timings_for_information: args.timings_for_information,
-        ..Default::default()
+        min_time_s: args.min_time,
+        instruction_threshold: args.instruction_threshold,
     };
-    check::run(&check::CheckRequest { run_dir: &args.run_dir, baseline: &args.baseline, options, json: args.json.clone() })
+    check::run(&check::CheckRequest {
+        run_dir: &args.run_dir,
+        baseline: &args.baseline,
+        options,
+        json: args.json.clone(),
+        confirm: !args.no_confirm,
+    })
 }
 
 /// Answers JSON worker requests on stdin with JSON timing lines on stdout (see `run::worker`).

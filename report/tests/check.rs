@@ -1,9 +1,11 @@
-//! `report::check` on synthetic rows: seeded noise around fixed medians, deterministic counters.
+//! `report::check` on synthetic rows: seeded noise around fixed medians, deterministic counters, instruction
+//! counts, one machine or two.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use report::check::{self, CheckOptions, SpeedupVerdict};
+use report::check::instructions::{self, InstructionCount};
+use report::check::{self, CheckOptions, SpeedupVerdict, TimingMode, Verdict};
 use report::spec::ReportSpec;
 use schema::{Accel, Row, Settings, Workload};
 use serde_json::Value;
@@ -19,6 +21,8 @@ const SEEDS: [u64; 2] = [1, 2];
 const REPETITIONS: u32 = 10;
 /// Relative standard deviation of the timing noise.
 const NOISE: f64 = 0.05;
+/// The machine of the generated rows unless a test names another.
+const MACHINE: &str = "3f2a00c0ffee";
 
 /// What differs between generated runs.
 struct Gen<'a> {
@@ -31,11 +35,20 @@ struct Gen<'a> {
     nodes_per_ray: Option<(&'a str, u64, u64, f64)>,
     /// Object counts generated.
     objects: &'a [u64],
+    /// `machine_id` of every row.
+    machine: &'a str,
 }
 
 impl Default for Gen<'_> {
     fn default() -> Self {
-        Gen { experiment: "synthetic", noise_seed: 1, slowdown: None, nodes_per_ray: None, objects: &OBJECTS }
+        Gen {
+            experiment: "synthetic",
+            noise_seed: 1,
+            slowdown: None,
+            nodes_per_ray: None,
+            objects: &OBJECTS,
+            machine: MACHINE,
+        }
     }
 }
 
@@ -115,6 +128,7 @@ fn runs_csv(g: &Gen) -> String {
                         harness_version: "0.1.0".into(),
                         validation: "exact".into(),
                         validated_against: AccelKind::List.name().into(),
+                        machine_id: g.machine.into(),
                         ..Row::of(&settings(accel, objects, seed))
                     };
                     out.push_str(&schema::row::csv_line(&row).unwrap());
@@ -137,8 +151,11 @@ fn run_dir(name: &str, runs: Option<&str>) -> PathBuf {
 }
 
 fn spec() -> ReportSpec {
-    let fixed: Vec<String> =
-        schema::row::setting_names().into_iter().filter(|c| !["objects", "seed"].contains(c)).map(String::from).collect();
+    let fixed: Vec<String> = schema::row::setting_names()
+        .into_iter()
+        .filter(|c| !["objects", "seed"].contains(c))
+        .map(String::from)
+        .collect();
     ReportSpec {
         name: "synthetic".into(),
         reference: Some("brute".into()),
@@ -150,12 +167,67 @@ fn spec() -> ReportSpec {
 
 /// Compares `new` (as the run) against `old` (as the baseline).
 fn compare(name: &str, new: &Gen, old: &Gen, options: &CheckOptions) -> Result<check::CheckOutcome, report::Error> {
-    let run = run_dir(&format!("{name}-run"), Some(&runs_csv(new)));
-    let baseline = run_dir(&format!("{name}-baseline"), Some(&runs_csv(old)));
+    compare_counted(name, (new, None), (old, None), options)
+}
+
+/// The instruction counts of every configuration of [`runs_csv`] (`trace` scaled by `factor`), counted by `rustc`.
+fn counts(factor: f64, rustc: &str) -> Vec<InstructionCount> {
+    let mut out = Vec::new();
+    for (label, accel) in SERIES {
+        for objects in OBJECTS {
+            for seed in SEEDS {
+                for (phase, base) in [
+                    ("build", objects * 900),
+                    ("trace", 3072 * if accel == AccelKind::List { objects * 40 } else { 700 }),
+                ] {
+                    out.push(InstructionCount {
+                        config_id: format!("{:016x}", fnv(&format!("{label}|{objects}|{seed}"))),
+                        series: label.into(),
+                        objects,
+                        width: 64,
+                        height: 48,
+                        phase: phase.into(),
+                        instructions: if phase == "trace" { (base as f64 * factor).round() as u64 } else { base },
+                        d1_misses: None,
+                        ll_misses: None,
+                        rustc: rustc.into(),
+                        target_features: String::new(),
+                        valgrind: "valgrind-3.19.0".into(),
+                        git_commit: "0123456789012345678901234567890123456789".into(),
+                        git_dirty: false,
+                    });
+                }
+            }
+        }
+    }
+    out
+}
+
+const RUSTC: &str = "rustc 1.95.0 (59807616e 2026-04-14)";
+
+/// Compares `new` (as the run) against `old` (as the baseline), each with its instruction counts when given.
+fn compare_counted(
+    name: &str,
+    new: (&Gen, Option<&[InstructionCount]>),
+    old: (&Gen, Option<&[InstructionCount]>),
+    options: &CheckOptions,
+) -> Result<check::CheckOutcome, report::Error> {
+    let run = run_dir(&format!("{name}-run"), Some(&runs_csv(new.0)));
+    let baseline = run_dir(&format!("{name}-baseline"), Some(&runs_csv(old.0)));
+    for (dir, counts) in [(&run, new.1), (&baseline, old.1)] {
+        if let Some(counts) = counts {
+            instructions::write(&dir.join(instructions::FILE), counts).unwrap();
+        }
+    }
     let outcome = check::compare(&run, &baseline, &spec(), options);
     let _ = std::fs::remove_dir_all(run);
     let _ = std::fs::remove_dir_all(baseline);
     outcome
+}
+
+/// The time comparisons of `series`' trace times.
+fn traces<'a>(outcome: &'a check::CheckOutcome, series: &'a str) -> impl Iterator<Item = &'a check::TimeComparison> {
+    outcome.times.iter().filter(move |t| t.series == series && t.metric == "trace_s")
 }
 
 #[test]
@@ -164,39 +236,167 @@ fn injected_slowdown_is_flagged() {
     let new = Gen { noise_seed: 12, slowdown: Some(("tree", 1.3)), ..Gen::default() };
     let outcome = compare("slow", &new, &old, &CheckOptions::default()).unwrap();
     println!("{}", outcome.markdown());
-    assert!(outcome.failed);
+    assert_eq!(outcome.mode, TimingMode::SameMachine { machine_id: MACHINE.into() });
+    assert!(outcome.failed());
     assert!(outcome.counter_changes.is_empty() && outcome.missing.is_empty(), "{outcome:?}");
     assert_eq!(outcome.common, 12);
-    // Two series besides the reference, two object counts each (seeds pooled).
-    assert_eq!(outcome.speedups.len(), 4, "{:?}", outcome.speedups);
-    for s in &outcome.speedups {
-        assert!(s.gating, "{s:?}");
-        assert!(s.point.starts_with("objects ") && s.point.contains("threads 1"), "{s:?}");
-        assert!(s.lo <= s.ratio && s.ratio <= s.hi, "{s:?}");
-        if s.series == "tree" {
-            assert_eq!(s.verdict, SpeedupVerdict::Regressed, "{s:?}");
-            assert!((s.ratio - 1.0 / 1.3).abs() < 0.05, "{s:?}");
-            assert!(s.hi < 1.0, "{s:?}");
-        } else {
-            assert_eq!(s.series, "flat");
-            assert_eq!(s.verdict, SpeedupVerdict::Unchanged, "{s:?}");
+    // Every configuration's trace and build time; builds under 0.1 ms (the list's 0 s; 1e-4 s at 100 objects)
+    // are too short to gate.
+    assert_eq!(outcome.times.len(), 24, "{:?}", outcome.times);
+    assert_eq!(outcome.times.iter().filter(|t| t.gating).count(), 12 + 2 * 2);
+    for t in &outcome.times {
+        assert_eq!(
+            t.gating,
+            t.metric == "trace_s" || (t.series != "brute" && t.settings.contains("objects 1000")),
+            "{t:?}"
+        );
+        let tree_trace = t.series == "tree" && t.metric == "trace_s";
+        assert_eq!(t.first.verdict == Verdict::Regressed, tree_trace, "{t:?}");
+        if tree_trace {
+            assert!((t.first.ratio.value - 1.3).abs() < 0.12 && t.first.ratio.lo > 1.0, "{t:?}");
+            assert!(t.fails() && t.confirmation.is_none(), "not measured again: fails");
         }
     }
-    // The same regression outside the gate (threads 2 gate) is reported but does not fail.
-    let options = CheckOptions { gate_threads: 2, ..CheckOptions::default() };
-    let ungated = compare("slow-ungated", &new, &old, &options).unwrap();
-    assert!(!ungated.failed, "{ungated:?}");
-    assert!(ungated.speedups.iter().all(|s| !s.gating));
-    assert_eq!(ungated.speedups.iter().filter(|s| s.verdict == SpeedupVerdict::Regressed).count(), 2);
+    assert_eq!(outcome.to_confirm().len(), 4, "two object counts × two seeds of the tree");
+    // Speedups: two series besides the reference, two object counts each (seeds pooled), for information.
+    assert_eq!(outcome.speedups.len(), 4, "{:?}", outcome.speedups);
+    for s in &outcome.speedups {
+        assert!(s.point.starts_with("objects ") && s.point.contains("threads 1"), "{s:?}");
+        assert!(s.lo <= s.ratio && s.ratio <= s.hi, "{s:?}");
+        let expected = if s.series == "tree" { SpeedupVerdict::Regressed } else { SpeedupVerdict::Unchanged };
+        assert_eq!(s.verdict, expected, "{s:?}");
+    }
     // A slowdown below the minimum effect is not a regression even when significant.
-    let slight = Gen { noise_seed: 12, slowdown: Some(("tree", 1.05)), ..Gen::default() };
+    let slight = Gen { noise_seed: 14, slowdown: Some(("tree", 1.03)), ..Gen::default() };
     let small = compare("slight", &slight, &old, &CheckOptions::default()).unwrap();
-    assert!(!small.failed, "{:?}", small.speedups);
+    assert!(!small.failed(), "{}", small.markdown());
+    assert!(traces(&small, "tree").any(|t| t.first.ratio.lo > 1.0), "significant: {}", small.markdown());
     // A faster series is an improvement and passes.
     let faster = Gen { noise_seed: 12, slowdown: Some(("flat", 1.0 / 1.5)), ..Gen::default() };
     let improved = compare("faster", &faster, &old, &CheckOptions::default()).unwrap();
-    assert!(!improved.failed);
-    assert!(improved.speedups.iter().filter(|s| s.series == "flat").all(|s| s.verdict == SpeedupVerdict::Improved));
+    assert!(!improved.failed());
+    assert!(traces(&improved, "flat").all(|t| t.first.verdict == Verdict::Improved));
+}
+
+#[test]
+fn a_slower_reference_series_fails_on_one_machine_and_informs_across_two() {
+    let old = Gen { noise_seed: 51, ..Gen::default() };
+    let new = Gen { noise_seed: 52, slowdown: Some(("brute", 1.2)), ..Gen::default() };
+    let same = compare("slow-reference", &new, &old, &CheckOptions::default()).unwrap();
+    let md = same.markdown();
+    println!("{md}");
+    assert!(same.failed(), "{md}");
+    assert!(traces(&same, "brute").all(|t| t.gating && t.first.verdict == Verdict::Regressed && t.fails()));
+    assert!(same.times.iter().filter(|t| t.series != "brute").all(|t| !t.fails()));
+    // The speedups over the slower reference rose: the old gate called this an improvement.
+    assert!(same.speedups.iter().all(|s| s.verdict == SpeedupVerdict::Improved), "{:?}", same.speedups);
+    assert!(md.contains("timing mode: same machine (machine_id 3f2a00c0ffee)"), "{md}");
+    assert!(md.contains("4 time regression(s) not measured again: brute random-spheres objects"), "{md}");
+
+    // The same rows from another machine: compared, never gating.
+    let elsewhere = Gen { noise_seed: 52, slowdown: Some(("brute", 1.2)), machine: "700eca0cc822", ..Gen::default() };
+    let other = compare("slow-reference-elsewhere", &elsewhere, &old, &CheckOptions::default()).unwrap();
+    let md = other.markdown();
+    assert!(!other.failed(), "{md}");
+    let TimingMode::Information { reason } = &other.mode else { panic!("{:?}", other.mode) };
+    assert_eq!(reason, "run on machine 700eca0cc822, baseline on machine 3f2a00c0ffee");
+    assert!(md.contains("timing mode: information only: run on machine 700eca0cc822, baseline on machine"), "{md}");
+    assert!(
+        other.times.iter().all(|t| !t.gating) && traces(&other, "brute").all(|t| t.first.verdict == Verdict::Regressed)
+    );
+    assert_eq!(other.speedups.len(), 4, "speedups are compared across machines too");
+    assert!(other.to_confirm().is_empty());
+    // Rows without a machine (recorded before machine_id) are never taken for one machine.
+    let unknown = Gen { machine: "", ..elsewhere };
+    let old_unknown = Gen { machine: "", ..old };
+    let none = compare("slow-reference-unknown", &unknown, &old_unknown, &CheckOptions::default()).unwrap();
+    assert!(!none.failed() && !none.mode.gates_times(), "{:?}", none.mode);
+    assert!(none.mode.line().contains("an unrecorded machine"), "{}", none.mode.line());
+}
+
+#[test]
+fn a_flagged_time_fails_only_when_measured_again_slower() {
+    let old = Gen { noise_seed: 61, ..Gen::default() };
+    let new = Gen { noise_seed: 62, slowdown: Some(("tree", 1.3)), ..Gen::default() };
+    let run = run_dir("confirm-run", Some(&runs_csv(&new)));
+    let baseline = run_dir("confirm-baseline", Some(&runs_csv(&old)));
+    let options = CheckOptions::default();
+    let first = check::compare(&run, &baseline, &spec(), &options).unwrap();
+    assert_eq!(first.to_confirm().len(), 4);
+    // Measured again at the baseline's speed: a passing check that shows both measurements.
+    let confirm = run.join("confirm.csv");
+    std::fs::write(&confirm, runs_csv(&Gen { noise_seed: 63, ..Gen::default() })).unwrap();
+    let mut cleared = first.clone();
+    cleared.confirm(&confirm, &baseline, &options).unwrap();
+    let md = cleared.markdown();
+    println!("{md}");
+    assert!(!cleared.failed(), "{md}");
+    assert!(
+        traces(&cleared, "tree")
+            .all(|t| t.flagged() && t.confirmation.is_some_and(|c| c.verdict == Verdict::Unchanged))
+    );
+    assert!(md.contains("4 time regression(s) of the first measurement not confirmed by the second"), "{md}");
+    assert!(md.contains("| **regressed** | yes | "), "the first measurement stays in the table: {md}");
+    let json: Value = serde_json::from_str(&cleared.to_json()).unwrap();
+    let flagged: Vec<&Value> =
+        json["times"].as_array().unwrap().iter().filter(|t| t["first"]["verdict"] == "regressed").collect();
+    assert_eq!(flagged.len(), 4);
+    assert!(flagged.iter().all(|t| t["confirmation"]["verdict"] == "unchanged" && t["fails"] == false), "{json}");
+    // Measured again just as slow: it fails, confirmed.
+    std::fs::write(&confirm, runs_csv(&Gen { noise_seed: 64, slowdown: Some(("tree", 1.3)), ..Gen::default() }))
+        .unwrap();
+    let mut confirmed = first.clone();
+    confirmed.confirm(&confirm, &baseline, &options).unwrap();
+    assert!(confirmed.failed());
+    assert!(
+        confirmed.markdown().contains("4 time regression(s) confirmed by a second measurement"),
+        "{}",
+        confirmed.markdown()
+    );
+    let _ = std::fs::remove_dir_all(run);
+    let _ = std::fs::remove_dir_all(baseline);
+}
+
+#[test]
+fn instruction_counts_gate_above_the_threshold_from_one_compiler() {
+    let (old, new) = (Gen { noise_seed: 71, ..Gen::default() }, Gen { noise_seed: 72, ..Gen::default() });
+    let base = counts(1.0, RUSTC);
+    let check = |name: &str, counts: &[InstructionCount], machine: &str| {
+        let new = Gen { machine, ..Gen { noise_seed: 72, ..Gen::default() } };
+        compare_counted(name, (&new, Some(counts)), (&old, Some(&base)), &CheckOptions::default()).unwrap()
+    };
+    // +3% instructions in every trace: fails, on any machine (timings there are for information).
+    let more = check("counts-more", &counts(1.03, RUSTC), "700eca0cc822");
+    let md = more.markdown();
+    println!("{md}");
+    assert!(more.failed() && more.instructions.gating, "{md}");
+    assert_eq!(more.instructions.regressions().count(), 12, "{md}");
+    assert!(more.instructions.regressions().all(|c| c.phase == "trace" && (c.ratio - 1.03).abs() < 1e-6));
+    assert!(
+        more.instructions.comparisons.iter().filter(|c| c.phase == "build").all(|c| c.verdict == Verdict::Unchanged)
+    );
+    assert!(md.contains("12 instruction-count regression(s): brute objects 100 trace +3.0%"), "{md}");
+    assert!(md.contains("instructions: gated: both counted with rustc 1.95.0"), "{md}");
+    assert!(!more.mode.gates_times());
+    // +1%: passes.
+    let little = check("counts-little", &counts(1.01, RUSTC), MACHINE);
+    assert!(!little.failed() && little.instructions.gating, "{}", little.markdown());
+    assert_eq!(little.instructions.comparisons.len(), 24);
+    // Another compiler: +3% is shown, for information.
+    let other = check("counts-rustc", &counts(1.03, "rustc 1.96.0 (00000000 2026-06-01)"), MACHINE);
+    let md = other.markdown();
+    assert!(!other.failed() && !other.instructions.gating, "{md}");
+    assert!(md.contains("instructions: for information only: the run was counted with rustc 1.96.0"), "{md}");
+    assert_eq!(other.instructions.regressions().count(), 12);
+    // Counts on one side only: not compared, said so.
+    let one = compare_counted("counts-one-side", (&new, None), (&old, Some(&base)), &CheckOptions::default()).unwrap();
+    assert!(!one.failed() && one.instructions.comparisons.is_empty());
+    assert!(one.instructions.note.contains("the run has no instructions.csv"), "{}", one.instructions.note);
+    // A stricter threshold catches +1%.
+    let strict = CheckOptions { instruction_threshold: 0.005, ..CheckOptions::default() };
+    let little =
+        compare_counted("counts-strict", (&new, Some(&counts(1.01, RUSTC))), (&old, Some(&base)), &strict).unwrap();
+    assert!(little.failed(), "{}", little.markdown());
 }
 
 #[test]
@@ -210,8 +410,9 @@ fn same_distribution_is_rarely_flagged() {
         let outcome = compare(&format!("null-{t}"), &new, &old, &CheckOptions::default()).unwrap();
         assert!(outcome.counter_changes.is_empty() && outcome.missing.is_empty());
         assert_eq!(outcome.speedups.len(), 4);
-        flagged += outcome.failed as usize;
-        significant += outcome.speedups.iter().any(|s| s.hi < 1.0 || s.lo > 1.0) as usize;
+        assert_eq!(outcome.times.len(), 24);
+        flagged += outcome.failed() as usize;
+        significant += outcome.times.iter().any(|t| t.first.ratio.hi < 1.0 || t.first.ratio.lo > 1.0) as usize;
     }
     println!("false alarms: {flagged} of {trials} trials flagged; {significant} trials had some interval excluding 1");
     assert!(flagged <= 5, "{flagged} of {trials} same-distribution trials flagged");
@@ -222,7 +423,7 @@ fn changed_counter_is_flagged_unless_accepted() {
     let old = Gen { noise_seed: 21, ..Gen::default() };
     let new = Gen { noise_seed: 22, nodes_per_ray: Some(("tree", 1000, 2, 99.5)), ..Gen::default() };
     let outcome = compare("counter", &new, &old, &CheckOptions::default()).unwrap();
-    assert!(outcome.failed);
+    assert!(outcome.failed());
     assert_eq!(outcome.counter_changes.len(), 1, "{:?}", outcome.counter_changes);
     let change = &outcome.counter_changes[0];
     assert_eq!((change.series.as_str(), change.column.as_str()), ("tree", "nodes_per_ray"));
@@ -230,24 +431,24 @@ fn changed_counter_is_flagged_unless_accepted() {
     assert_eq!(change.new, "99.5");
     assert_eq!(change.settings, "random-spheres objects 1000 seed 2");
     assert_eq!(change.config_id, format!("{:016x}", fnv("tree|1000|2")));
-    assert!(outcome.speedups.iter().all(|s| s.verdict != SpeedupVerdict::Regressed));
+    assert!(outcome.times.iter().all(|t| !t.fails()));
     let md = outcome.markdown();
     assert!(md.contains("FAIL") && md.contains("nodes_per_ray") && md.contains("→ 99.5"), "{md}");
 
     let accept = CheckOptions { accept_counter_changes: true, ..CheckOptions::default() };
     let accepted = compare("counter-accepted", &new, &old, &accept).unwrap();
-    assert!(!accepted.failed);
+    assert!(!accepted.failed());
     assert_eq!(accepted.counter_changes, outcome.counter_changes);
     assert!(accepted.markdown().contains("PASS"));
 
     // A configuration on one side only is listed and fails the check unless accepted.
     let fewer = Gen { noise_seed: 23, objects: &[100], ..Gen::default() };
     let partial = compare("missing", &fewer, &old, &CheckOptions::default()).unwrap();
-    assert!(partial.failed);
+    assert!(partial.failed());
     assert_eq!(partial.missing.len(), 6, "{:?}", partial.missing);
     assert!(partial.missing.iter().all(|m| m.starts_with("only in baseline") && m.contains("objects 1000")));
     assert_eq!(partial.speedups.len(), 2);
-    assert!(!compare("missing-accepted", &fewer, &old, &accept).unwrap().failed);
+    assert!(!compare("missing-accepted", &fewer, &old, &accept).unwrap().failed());
 }
 
 #[test]
@@ -274,14 +475,15 @@ fn mismatches_are_one_line_errors_naming_the_file() {
 }
 
 #[test]
-fn without_reference_only_counters_are_compared() {
+fn without_reference_no_speedups_are_compared() {
     let old = Gen { noise_seed: 31, ..Gen::default() };
     let new = Gen { noise_seed: 32, slowdown: Some(("tree", 1.3)), ..Gen::default() };
     let run = run_dir("noref-run", Some(&runs_csv(&new)));
     let baseline = run_dir("noref-baseline", Some(&runs_csv(&old)));
     let spec = ReportSpec { reference: None, ..spec() };
     let outcome = check::compare(&run, &baseline, &spec, &CheckOptions::default()).unwrap();
-    assert!(outcome.speedups.is_empty() && !outcome.failed, "{outcome:?}");
+    assert!(outcome.speedups.is_empty(), "{outcome:?}");
+    assert!(outcome.failed() && traces(&outcome, "tree").all(|t| t.fails()), "times still gate");
     assert!(outcome.markdown().contains("counters: all 12 configurations identical"));
     let _ = std::fs::remove_dir_all(run);
     let _ = std::fs::remove_dir_all(baseline);
@@ -299,14 +501,20 @@ fn markdown_and_json_list_every_measure() {
     let outcome = compare("output", &new, &old, &CheckOptions::default()).unwrap();
     let md = outcome.markdown();
     println!("{md}");
-    assert!(md.contains("FAIL") && md.contains("**regressed**") && md.contains("tree at objects"), "{md}");
+    assert!(md.starts_with("## Regression check\n\ntiming mode: same machine"), "{md}");
+    assert!(md.contains("FAIL") && md.contains("**regressed**"), "{md}");
+    // Failing times come first in the time table.
+    let times: Vec<&str> = md.lines().filter(|l| l.contains("_s | ")).collect();
+    assert_eq!(times.len(), 24, "{md}");
+    assert!(
+        times[..4].iter().all(|r| r.contains(" tree, ") && r.contains("**regressed** | yes | not measured again")),
+        "{md}"
+    );
+    assert!(times[4..].iter().all(|r| !r.contains("regressed")), "{md}");
     // Regressions come first in the speedup table.
     let rows: Vec<&str> = md.lines().filter(|l| l.contains("| objects ")).collect();
     assert_eq!(rows.len(), 4, "{md}");
-    assert!(
-        rows[0].starts_with("| tree |") && rows[0].contains("**regressed**") && rows[0].ends_with("| yes |"),
-        "{md}"
-    );
+    assert!(rows[0].starts_with("| tree |") && rows[0].ends_with("| regressed |"), "{md}");
     assert!(
         rows[1].starts_with("| tree |") && rows[3].starts_with("| flat |") && rows[3].contains("unchanged"),
         "{md}"
@@ -316,6 +524,8 @@ fn markdown_and_json_list_every_measure() {
     println!("{json}");
     let value: Value = serde_json::from_str(&json).unwrap_or_else(|e| panic!("invalid JSON ({e}):\n{json}"));
     assert_eq!(value.get("failed"), Some(&Value::Bool(true)));
+    assert_eq!(value["timing_mode"]["mode"], "same-machine");
+    assert_eq!(value["timing_mode"]["machine_id"], MACHINE);
     let Some(Value::Array(speedups)) = value.get("speedups") else { panic!("{json}") };
     assert_eq!(speedups.len(), outcome.speedups.len());
     for (s, c) in speedups.iter().zip(&outcome.speedups) {
@@ -327,7 +537,14 @@ fn markdown_and_json_list_every_measure() {
         }
         assert_eq!(s["ratio"]["lower"].as_f64(), Some(c.lo));
         assert_eq!(s.get("verdict"), Some(&Value::String(c.verdict.word().into())));
-        assert_eq!(s.get("gating"), Some(&Value::Bool(c.gating)));
+    }
+    let Some(Value::Array(times)) = value.get("times") else { panic!("{json}") };
+    assert_eq!(times.len(), outcome.times.len());
+    for (j, t) in times.iter().zip(&outcome.times) {
+        assert_eq!(j["first"]["ratio"]["lower"].as_f64(), Some(t.first.ratio.lo).filter(|v| v.is_finite()));
+        assert_eq!(j["first"]["old"]["value"].as_f64(), Some(t.first.old.value));
+        assert_eq!((j["gating"].as_bool(), j["fails"].as_bool()), (Some(t.gating), Some(t.fails())));
+        assert_eq!(j["confirmation"], Value::Null);
     }
     let Some(Value::Array(changes)) = value.get("counter_changes") else { panic!("{json}") };
     assert_eq!(changes.len(), 1);
@@ -341,9 +558,13 @@ fn timings_for_information_never_fail_but_counters_still_do() {
     let slow = Gen { noise_seed: 42, slowdown: Some(("tree", 1.3)), ..Gen::default() };
     let info = CheckOptions { timings_for_information: true, ..CheckOptions::default() };
     let outcome = compare("info-slow", &slow, &old, &info).unwrap();
-    assert!(!outcome.failed, "a 30% slowdown is reported, not gated: {}", outcome.markdown());
-    assert!(outcome.speedups.iter().any(|s| s.verdict == SpeedupVerdict::Regressed && !s.gating));
-    assert!(outcome.markdown().contains("compared for information only"));
+    assert!(!outcome.failed(), "a 30% slowdown is reported, not gated: {}", outcome.markdown());
+    assert!(traces(&outcome, "tree").all(|t| t.first.verdict == Verdict::Regressed && !t.gating));
+    assert!(outcome.to_confirm().is_empty());
+    assert_eq!(
+        outcome.mode.line(),
+        "timing mode: information only: forced by --timings-for-information; gating instruction counts and work counters"
+    );
     let counter = Gen { noise_seed: 43, nodes_per_ray: Some(("tree", 1000, 2, 99.5)), ..Gen::default() };
-    assert!(compare("info-counter", &counter, &old, &info).unwrap().failed, "counters still gate");
+    assert!(compare("info-counter", &counter, &old, &info).unwrap().failed(), "counters still gate");
 }

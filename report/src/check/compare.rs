@@ -1,19 +1,23 @@
-//! Computing a [`CheckOutcome`]: counters compared exactly per configuration, speedups compared with a
-//! bootstrap interval of `new / old`.
+//! Computing a [`CheckOutcome`]: the timing mode, counters compared exactly per configuration, instruction counts
+//! (module `instructions`), every configuration's phase times and the speedups compared with bootstrap intervals
+//! of `new / old`; and the second measurement of flagged times ([`CheckOutcome::confirm`]).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use tracer::rng::SplitMix64;
 
-use super::{CheckOptions, CheckOutcome, CounterChange, SpeedupComparison, SpeedupVerdict};
+use super::{
+    CheckOptions, CheckOutcome, CounterChange, SpeedupComparison, TIMED_PHASES, TimeComparison, TimeRatio, TimingMode,
+    Verdict, instructions,
+};
 use crate::error::Error;
-use crate::pool::{self, pool_key};
+use crate::pool;
 use crate::rows::{self, Rows, Run, SETTINGS};
 use crate::spec::ReportSpec;
 use crate::stats;
 
-/// Compares `run_dir/runs.csv` with `baseline_dir/runs.csv`.
+/// Compares `run_dir/runs.csv` with `baseline_dir/runs.csv`, and their `instructions.csv` where both have one.
 pub fn compare(
     run_dir: &Path,
     baseline_dir: &Path,
@@ -38,19 +42,147 @@ pub fn compare(
         return Err(Error::MissingColumn { path, column: options.metric.clone() });
     }
 
-    let Counters { changes: counter_changes, missing, common } = compare_counters(spec, &new, &old);
+    let describe = Describer::new(&new.runs, &old.runs);
+    let Counters { changes: counter_changes, missing, common } = compare_counters(&describe, &new, &old);
     if common == 0 {
         return Err(mismatch(format!("no configuration in common with baseline {}", old_path.display())));
     }
-
+    let mode = timing_mode(&new, &old, options.timings_for_information);
+    let times = times(&describe, &new.runs, &old.runs, &mode, options);
     let speedups = match &spec.reference {
         Some(reference) => speedups(spec, reference, &new.runs, &old.runs, options),
         None => Vec::new(),
     };
-    let regressed = speedups.iter().any(|s| s.gating && s.verdict == SpeedupVerdict::Regressed);
-    let unaccepted = !options.accept_counter_changes && (!counter_changes.is_empty() || !missing.is_empty());
-    let timings_for_information = options.timings_for_information;
-    Ok(CheckOutcome { counter_changes, missing, speedups, common, failed: regressed || unaccepted, timings_for_information })
+    let instructions = instructions::check(run_dir, baseline_dir, options.instruction_threshold)?;
+    Ok(CheckOutcome {
+        mode,
+        counter_changes,
+        missing,
+        instructions,
+        times,
+        speedups,
+        common,
+        accept_counter_changes: options.accept_counter_changes,
+    })
+}
+
+impl CheckOutcome {
+    /// Adds the second measurement of every flagged time ([`CheckOutcome::to_confirm`]) from `confirm_csv` (rows
+    /// of those configurations measured again, in the format of `runs.csv`), compared with `baseline_dir`'s rows
+    /// by the same rule. A flagged time without rows in `confirm_csv` keeps failing.
+    pub fn confirm(&mut self, confirm_csv: &Path, baseline_dir: &Path, options: &CheckOptions) -> Result<(), Error> {
+        let again = rows::read(confirm_csv)?;
+        let old = rows::read(&baseline_dir.join("runs.csv"))?;
+        let (again, old) = (by_config(&again.runs), by_config(&old.runs));
+        for t in self.times.iter_mut().filter(|t| t.flagged()) {
+            let (Some(new), Some(base)) = (again.get(t.config_id.as_str()), old.get(t.config_id.as_str())) else {
+                continue;
+            };
+            let key = format!("check|time|{}|{}|confirm", t.config_id, t.metric);
+            t.confirmation = time_ratio(
+                &pool::samples(new.iter().copied(), t.metric),
+                &pool::samples(base.iter().copied(), t.metric),
+                &key,
+                options.min_effect,
+            );
+        }
+        Ok(())
+    }
+}
+
+/// Same machine when every row of both files (failed ones included) has one and the same non-empty
+/// `machine_id`; else, or when `forced`, information only, saying why.
+fn timing_mode(new: &Rows, old: &Rows, forced: bool) -> TimingMode {
+    let ids = |rows: &Rows| -> BTreeSet<String> {
+        rows.runs.iter().chain(&rows.failed).map(|r| r.row.machine_id.clone()).collect()
+    };
+    let (n, o) = (ids(new), ids(old));
+    let name = |ids: &BTreeSet<String>| -> String {
+        let named: Vec<String> =
+            ids.iter().map(|id| if id.is_empty() { "an unrecorded machine".to_string() } else { id.clone() }).collect();
+        match named.len() {
+            1 => format!("machine {}", named[0]),
+            _ => format!("{} machines ({})", named.len(), named.join(", ")),
+        }
+    };
+    if forced {
+        return TimingMode::Information { reason: "forced by --timings-for-information".into() };
+    }
+    match (n.iter().next(), n.len(), o.len()) {
+        (Some(id), 1, 1) if !id.is_empty() && n == o => TimingMode::SameMachine { machine_id: id.clone() },
+        _ => TimingMode::Information { reason: format!("run on {}, baseline on {}", name(&n), name(&o)) },
+    }
+}
+
+/// Runs by configuration id.
+fn by_config(runs: &[Run]) -> BTreeMap<&str, Vec<&Run>> {
+    let mut map: BTreeMap<&str, Vec<&Run>> = BTreeMap::new();
+    for run in runs {
+        map.entry(run.config_id()).or_default().push(run);
+    }
+    map
+}
+
+/// Every phase of [`TIMED_PHASES`] of every configuration timed on both sides, in the run's order.
+fn times(
+    describe: &Describer,
+    new: &[Run],
+    old: &[Run],
+    mode: &TimingMode,
+    options: &CheckOptions,
+) -> Vec<TimeComparison> {
+    let (new_by, old_by) = (by_config(new), by_config(old));
+    let mut seen = BTreeSet::new();
+    let mut out = Vec::new();
+    for run in new {
+        let id = run.config_id();
+        if !seen.insert(id) {
+            continue;
+        }
+        let Some(base) = old_by.get(id) else { continue };
+        for metric in TIMED_PHASES {
+            let (n, o) =
+                (pool::samples(new_by[id].iter().copied(), metric), pool::samples(base.iter().copied(), metric));
+            let key = format!("check|time|{id}|{metric}");
+            let Some(first) = time_ratio(&n, &o, &key, options.min_effect) else { continue };
+            out.push(TimeComparison {
+                config_id: id.to_string(),
+                series: run.series().to_string(),
+                settings: describe.settings(run),
+                threads: match run.num("threads") {
+                    used if used.is_finite() => format!("{used}"),
+                    _ => run.text("threads").to_string(),
+                },
+                metric,
+                gating: mode.gates_times() && first.old.value >= options.min_time_s,
+                first,
+                confirmation: None,
+            });
+        }
+    }
+    out
+}
+
+/// Medians of `new` and `old` with intervals and their ratio new/old; slower (regressed) when the ratio's
+/// interval lies above 1 and the ratio exceeds `1 + min_effect`. `None` without samples on either side.
+fn time_ratio(new: &[f64], old: &[f64], key: &str, min_effect: f64) -> Option<TimeRatio> {
+    if new.is_empty() || old.is_empty() {
+        return None;
+    }
+    let ratio = stats::ratio_ci(new, old, stats::seed_for(key));
+    let verdict = if ratio.lo > 1.0 && ratio.value > 1.0 + min_effect {
+        Verdict::Regressed
+    } else if ratio.hi < 1.0 && ratio.value < 1.0 - min_effect {
+        Verdict::Improved
+    } else {
+        Verdict::Unchanged
+    };
+    Some(TimeRatio {
+        old: stats::median_ci(old, stats::seed_for(&format!("{key}|old"))),
+        new: stats::median_ci(new, stats::seed_for(&format!("{key}|new"))),
+        ratio,
+        verdict,
+    })
 }
 
 /// What the counter comparison found.
@@ -64,8 +196,7 @@ struct Counters {
 }
 
 /// Compares the [`super::counters`] of the first repetition of every configuration present in both files.
-fn compare_counters(spec: &ReportSpec, new: &Rows, old: &Rows) -> Counters {
-    let describe = Describer::new(spec, &new.runs, &old.runs);
+fn compare_counters(describe: &Describer, new: &Rows, old: &Rows) -> Counters {
     let (new_first, old_first) = (first_repetitions(&new.runs), first_repetitions(&old.runs));
     let mut changes = Vec::new();
     let mut missing = Vec::new();
@@ -120,38 +251,42 @@ fn first_repetitions(runs: &[Run]) -> BTreeMap<&str, &Run> {
     first
 }
 
-/// Describes a configuration by scene plus the settings that vary across both files.
-struct Describer<'a> {
-    spec: &'a ReportSpec,
-    varying: Vec<&'static str>,
+/// Describes a configuration by its scene plus the settings that vary among its series' rows in both files.
+struct Describer {
+    varying: BTreeMap<String, Vec<&'static str>>,
 }
 
-impl<'a> Describer<'a> {
-    fn new(spec: &'a ReportSpec, new: &[Run], old: &[Run]) -> Self {
-        let all: Vec<&Run> = new.iter().chain(old).collect();
-        let varying = SETTINGS
-            .iter()
-            .copied()
-            .filter(|c| *c != "scene")
-            .filter(|c| all.iter().any(|r| r.text(c) != all[0].text(c)))
+impl Describer {
+    fn new(new: &[Run], old: &[Run]) -> Self {
+        let mut by_series: BTreeMap<&str, Vec<&Run>> = BTreeMap::new();
+        for run in new.iter().chain(old) {
+            by_series.entry(run.series()).or_default().push(run);
+        }
+        let varying = by_series
+            .into_iter()
+            .map(|(series, runs)| {
+                let columns = SETTINGS
+                    .iter()
+                    .copied()
+                    .filter(|c| *c != "scene")
+                    .filter(|c| runs.iter().any(|r| r.text(c) != runs[0].text(c)))
+                    .collect();
+                (series.to_string(), columns)
+            })
             .collect();
-        Describer { spec, varying }
+        Describer { varying }
     }
 
     fn settings(&self, run: &Run) -> String {
-        let fixed = self.spec.series_fixed.get(run.series());
         let mut parts = vec![run.text("scene").to_string()];
-        for column in &self.varying {
-            if !fixed.is_some_and(|f| f.iter().any(|c| c == column)) {
-                parts.push(format!("{column} {}", run.text(column)));
-            }
+        for column in self.varying.get(run.series()).into_iter().flatten() {
+            parts.push(format!("{column} {}", run.text(column)));
         }
         parts.join(" ")
     }
 }
 
-
-/// Speedup comparisons of every non-reference series at every point present in both runs.
+/// Speedup comparisons of every non-reference series at every point present in both runs (for information).
 pub(crate) fn speedups(
     spec: &ReportSpec,
     reference: &str,
@@ -160,8 +295,12 @@ pub(crate) fn speedups(
     options: &CheckOptions,
 ) -> Vec<SpeedupComparison> {
     let metric = options.metric.as_str();
+    // Points are matched across the two files whatever machines recorded them (`pool_key` holds `machine_id`).
+    let point_key = |run: &Run| {
+        schema::row::pool_key(run.series(), |c| if c == "machine_id" { String::new() } else { run.text(c).to_string() })
+    };
     let old_pools: BTreeMap<Vec<String>, Vec<&Run>> =
-        pool::seed_pools(old).into_iter().map(|group| (pool_key(group[0]), group)).collect();
+        pool::seed_pools(old).into_iter().map(|group| (point_key(group[0]), group)).collect();
     let mut series: Vec<String> = spec.series.clone();
     for run in new {
         if !series.iter().any(|s| s == run.series()) {
@@ -172,7 +311,7 @@ pub(crate) fn speedups(
     for label in series.iter().filter(|s| *s != reference) {
         for (fixed, groups) in pool::curves_of(new, label, "objects") {
             for (x, new_group) in groups {
-                let Some(old_group) = old_pools.get(&pool_key(new_group[0])) else { continue };
+                let Some(old_group) = old_pools.get(&point_key(new_group[0])) else { continue };
                 let side = |runs: &[Run], group: &[&Run]| {
                     let reference_runs = pool::counterparts(spec, runs, reference, group, &["seed"]);
                     (pool::samples(reference_runs, metric), pool::samples(group.iter().copied(), metric))
@@ -190,14 +329,12 @@ pub(crate) fn speedups(
                 } else {
                     format!("objects {x} ({fixed}, threads {threads})")
                 };
-                let key = format!("check|{reference}/{label}|{}|{metric}", pool_key(new_group[0]).join("|"));
+                let key = format!("check|{reference}/{label}|{}|{metric}", point_key(new_group[0]).join("|"));
                 let old_e = stats::ratio_ci(&ref_old, &ser_old, stats::seed_for(&format!("{key}|old")));
                 let new_e = stats::ratio_ci(&ref_new, &ser_new, stats::seed_for(&format!("{key}|new")));
                 let ratio = new_e.value / old_e.value;
                 let (lo, hi) = ratio_of_ratios_ci([&ref_new, &ser_new, &ref_old, &ser_old], stats::seed_for(&key));
                 let verdict = verdict(ratio, lo, hi, options.min_effect);
-                let gating = !options.timings_for_information
-                    && new_group.iter().all(|r| r.num("threads") == options.gate_threads as f64);
                 out.push(SpeedupComparison {
                     series: label.clone(),
                     point,
@@ -207,7 +344,6 @@ pub(crate) fn speedups(
                     lo,
                     hi,
                     verdict,
-                    gating,
                 });
             }
         }
@@ -215,14 +351,15 @@ pub(crate) fn speedups(
     out
 }
 
-/// Regressed or improved when the ratio's interval excludes 1 and the ratio moved by more than `min_effect`.
-fn verdict(ratio: f64, lo: f64, hi: f64, min_effect: f64) -> SpeedupVerdict {
+/// A speedup regressed (fell) or improved when the ratio's interval excludes 1 and the ratio moved by more than
+/// `min_effect`.
+fn verdict(ratio: f64, lo: f64, hi: f64, min_effect: f64) -> Verdict {
     if hi < 1.0 && ratio < 1.0 - min_effect {
-        SpeedupVerdict::Regressed
+        Verdict::Regressed
     } else if lo > 1.0 && ratio > 1.0 + min_effect {
-        SpeedupVerdict::Improved
+        Verdict::Improved
     } else {
-        SpeedupVerdict::Unchanged
+        Verdict::Unchanged
     }
 }
 
