@@ -1,7 +1,10 @@
-//! Build time and single-thread primary-ray throughput of every structure and split at 1e3, 1e4, 1e5 spheres.
+//! Single-thread build time and primary-ray throughput of every structure and split at 1e3, 1e4, 1e5 spheres,
+//! and the flat BVH's build time in 1- and 2-thread pools at 1e5 and 1e6 spheres.
 //!
 //! `cargo bench -p tracer --bench accel` (criterion reports primary throughput as elements/s = rays/s).
 //! The scene is random-spheres seed 1; the primary image is 256×192 for trees and 64×48 for the list.
+//! Builds use the threads of the rayon pool they run in: `build` runs in a 1-thread pool, `build-threads`
+//! in pools of the thread count its ids name.
 
 use std::hint::black_box;
 use std::time::Duration;
@@ -33,16 +36,44 @@ fn label(p: &AccelParams) -> String {
     }
 }
 
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool")
+}
+
+/// Serial build time: every tree in a 1-thread pool.
 fn build(c: &mut Criterion) {
     let mut group = c.benchmark_group("build");
     group.sample_size(10).warm_up_time(Duration::from_millis(500)).measurement_time(Duration::from_secs(2));
+    let serial = pool(1);
     for n in SIZES {
         let scene = SceneKind::RandomSpheres.generate(n, 1);
         group.throughput(Throughput::Elements(n as u64));
         for p in tree_params().into_iter().filter(|p| p.bvh.traversal == Traversal::Fixed) {
             group.bench_with_input(BenchmarkId::new(label(&p), n), &p, |b, p| {
-                b.iter(|| black_box(BuiltAccel::build(&scene.spheres, p)))
+                b.iter(|| black_box(serial.install(|| BuiltAccel::build(&scene.spheres, p))))
             });
+        }
+    }
+    group.finish();
+}
+
+/// Parallel build: the flat BVH with the paper's split and binned SAH in 1- and 2-thread pools
+/// (ids `flat-bvh/{split}/threads={t}/{spheres}`).
+fn build_threads(c: &mut Criterion) {
+    let mut group = c.benchmark_group("build-threads");
+    group.sample_size(10).warm_up_time(Duration::from_millis(500)).measurement_time(Duration::from_secs(2));
+    let pools = [1, 2].map(|t| (t, pool(t)));
+    for n in [100_000, 1_000_000] {
+        let scene = SceneKind::RandomSpheres.generate(n, 1);
+        group.throughput(Throughput::Elements(n as u64));
+        for split in [Split::CentroidMidpoint, Split::BinnedSah] {
+            let p = AccelParams { kind: AccelKind::FlatBvh, bvh: BvhParams { split, ..BvhParams::default() } };
+            for (threads, pool) in &pools {
+                let id = BenchmarkId::new(format!("flat-bvh/{}/threads={threads}", split.name()), n);
+                group.bench_function(id, |b| {
+                    b.iter(|| black_box(pool.install(|| BuiltAccel::build(&scene.spheres, &p))))
+                });
+            }
         }
     }
     group.finish();
@@ -72,5 +103,5 @@ fn primary(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, build, primary);
+criterion_group!(benches, build, build_threads, primary);
 criterion_main!(benches);

@@ -112,6 +112,10 @@ pub trait AccelVisitor {
 
 impl BuiltAccel {
     /// Builds the structure `params` names over `spheres` (the tree parameters must be valid).
+    ///
+    /// Trees build with the threads of the current rayon pool (outside any pool: rayon's global pool), so run
+    /// it inside `pool.install(..)` to choose the thread count; the tree is identical whatever the thread count
+    /// (see [`bvh::builder`]).
     pub fn build(spheres: &[Sphere], params: &AccelParams) -> Self {
         match params.kind {
             AccelKind::List => BuiltAccel::List(List::build(spheres)),

@@ -19,6 +19,9 @@ pub struct FlatBvh {
 
 impl FlatBvh {
     /// Builds the tree and lays it out.
+    ///
+    /// Builds with the threads of the current rayon pool (outside any pool: rayon's global pool); the tree is
+    /// identical whatever the thread count (see [`builder`]).
     pub fn build(spheres: &[Sphere], params: &BvhParams) -> Self {
         let built = builder::build(spheres, params);
         let ordered = built.prim_order.iter().map(|&p| spheres[p as usize]).collect();

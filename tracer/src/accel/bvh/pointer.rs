@@ -58,6 +58,9 @@ fn boxed(tree: &BuiltTree, index: usize) -> BvhNode {
 
 impl Bvh {
     /// Builds the tree and boxes its nodes.
+    ///
+    /// Builds with the threads of the current rayon pool (outside any pool: rayon's global pool); the tree is
+    /// identical whatever the thread count (see [`builder`]).
     pub fn build(spheres: &[Sphere], params: &BvhParams) -> Self {
         let built = builder::build(spheres, params);
         Self { root: boxed(&built, 0), spheres: spheres.to_vec(), params: *params }
