@@ -81,9 +81,13 @@ pub struct CheckArgs {
     /// The baseline folder (e.g. results/baselines/ci).
     #[arg(long)]
     pub baseline: PathBuf,
-    /// Smallest change of a time or speedup that counts as a regression or improvement (0.10 = 10%).
+    /// Smallest change of a trace time or speedup that counts as a regression or improvement (0.10 = 10%): a time
+    /// regressed when the 95% interval of new/old lies above 1 + this.
     #[arg(long, default_value_t = 0.10)]
     pub min_effect: f64,
+    /// The same for build times (builds of a few ms drift by up to 1.5x between runs on a shared machine).
+    #[arg(long, default_value_t = 0.30)]
+    pub min_effect_build: f64,
     /// Metric the speedups are computed from.
     #[arg(long, default_value = "trace_s")]
     pub metric: String,

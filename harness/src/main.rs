@@ -144,8 +144,10 @@ fn history_append(run_dir: &Path, dir: &Path) -> Result<(), Error> {
 }
 
 fn check_command(args: &CheckArgs) -> Result<(), Error> {
-    if !(0.0..1.0).contains(&args.min_effect) {
-        return Err(Error::Input(format!("--min-effect {}: out of range (allowed: 0 <= x < 1)", args.min_effect)));
+    for (name, value) in [("--min-effect", args.min_effect), ("--min-effect-build", args.min_effect_build)] {
+        if !(0.0..1.0).contains(&value) {
+            return Err(Error::Input(format!("{name} {value}: out of range (allowed: 0 <= x < 1)")));
+        }
     }
     if !(0.0..1.0).contains(&args.instruction_threshold) {
         return Err(Error::Input(format!(
@@ -156,6 +158,7 @@ fn check_command(args: &CheckArgs) -> Result<(), Error> {
     let options = report::check::CheckOptions {
         metric: args.metric.clone(),
         min_effect: args.min_effect,
+        min_effect_build: args.min_effect_build,
         accept_counter_changes: args.accept_counter_changes,
         timings_for_information: args.timings_for_information,
         min_time_s: args.min_time,

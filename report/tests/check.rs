@@ -37,6 +37,8 @@ struct Gen<'a> {
     objects: &'a [u64],
     /// `machine_id` of every row.
     machine: &'a str,
+    /// `build_s` of this series is multiplied by the factor.
+    build_slowdown: Option<(&'a str, f64)>,
 }
 
 impl Default for Gen<'_> {
@@ -48,6 +50,7 @@ impl Default for Gen<'_> {
             nodes_per_ray: None,
             objects: &OBJECTS,
             machine: MACHINE,
+            build_slowdown: None,
         }
     }
 }
@@ -97,7 +100,8 @@ fn runs_csv(g: &Gen) -> String {
                 let tree_nodes = if tree { objects / 2 } else { 0 };
                 for rep in 0..REPETITIONS {
                     let trace_s = base * factor * (1.0 + NOISE * rng.normal());
-                    let build_s = if tree { objects as f64 * 1e-6 } else { 0.0 };
+                    let build_factor = g.build_slowdown.filter(|(s, _)| *s == label).map_or(1.0, |(_, f)| f);
+                    let build_s = if tree { objects as f64 * 1e-6 * build_factor } else { 0.0 };
                     let rays = 3072;
                     let row = Row {
                         experiment: g.experiment.into(),
@@ -312,6 +316,29 @@ fn a_slower_reference_series_fails_on_one_machine_and_informs_across_two() {
     let none = compare("slow-reference-unknown", &unknown, &old_unknown, &CheckOptions::default()).unwrap();
     assert!(!none.failed() && !none.mode.gates_times(), "{:?}", none.mode);
     assert!(none.mode.line().contains("an unrecorded machine"), "{}", none.mode.line());
+}
+
+#[test]
+fn build_times_gate_beyond_their_own_minimum_effect() {
+    let old = Gen { noise_seed: 81, ..Gen::default() };
+    let builds = |factor: f64| {
+        let new = Gen { noise_seed: 82, build_slowdown: Some(("flat", factor)), ..Gen::default() };
+        let outcome = compare(&format!("build-{factor}"), &new, &old, &CheckOptions::default()).unwrap();
+        let flat: Vec<Verdict> = outcome
+            .times
+            .iter()
+            .filter(|t| t.series == "flat" && t.metric == "build_s" && t.gating)
+            .map(|t| t.first.verdict)
+            .collect();
+        assert_eq!(flat.len(), 2, "the 1000-object builds gate (1 ms); the 100-object ones are too short");
+        (outcome.failed(), flat)
+    };
+    // 20% slower builds are within the drift of builds between runs (min_effect_build 30%); 50% is not.
+    assert_eq!(builds(1.2), (false, vec![Verdict::Unchanged; 2]));
+    assert_eq!(builds(1.5), (true, vec![Verdict::Regressed; 2]));
+    let strict = CheckOptions { min_effect_build: 0.1, ..CheckOptions::default() };
+    let new = Gen { noise_seed: 82, build_slowdown: Some(("flat", 1.2)), ..Gen::default() };
+    assert!(compare("build-strict", &new, &old, &strict).unwrap().failed());
 }
 
 #[test]

@@ -83,7 +83,7 @@ impl CheckOutcome {
                 &pool::samples(new.iter().copied(), t.metric),
                 &pool::samples(base.iter().copied(), t.metric),
                 &key,
-                options.min_effect,
+                options.time_effect(t.metric),
             );
         }
         Ok(())
@@ -144,7 +144,7 @@ fn times(
             let (n, o) =
                 (pool::samples(new_by[id].iter().copied(), metric), pool::samples(base.iter().copied(), metric));
             let key = format!("check|time|{id}|{metric}");
-            let Some(first) = time_ratio(&n, &o, &key, options.min_effect) else { continue };
+            let Some(first) = time_ratio(&n, &o, &key, options.time_effect(metric)) else { continue };
             out.push(TimeComparison {
                 config_id: id.to_string(),
                 series: run.series().to_string(),
@@ -164,15 +164,16 @@ fn times(
 }
 
 /// Medians of `new` and `old` with intervals and their ratio new/old; slower (regressed) when the ratio's
-/// interval lies above 1 and the ratio exceeds `1 + min_effect`. `None` without samples on either side.
+/// interval lies above `1 + min_effect` (faster, improved, when it lies below `1 - min_effect`). `None` without
+/// samples on either side.
 fn time_ratio(new: &[f64], old: &[f64], key: &str, min_effect: f64) -> Option<TimeRatio> {
     if new.is_empty() || old.is_empty() {
         return None;
     }
     let ratio = stats::ratio_ci(new, old, stats::seed_for(key));
-    let verdict = if ratio.lo > 1.0 && ratio.value > 1.0 + min_effect {
+    let verdict = if ratio.lo > 1.0 + min_effect {
         Verdict::Regressed
-    } else if ratio.hi < 1.0 && ratio.value < 1.0 - min_effect {
+    } else if ratio.hi < 1.0 - min_effect {
         Verdict::Improved
     } else {
         Verdict::Unchanged

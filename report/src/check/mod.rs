@@ -9,8 +9,9 @@
 //!
 //! and two from wall times, whose gating depends on the [`TimingMode`]:
 //! - **absolute times** (`trace_s`, `build_s`) of every configuration, the reference series and multi-thread
-//!   ones included: a ratio of medians new/old with a 95% bootstrap interval; they gate only when every row of
-//!   run and baseline comes from one machine (`machine_id`). A flagged configuration is measured again
+//!   ones included: a ratio of medians new/old with a 95% bootstrap interval, regressed when the interval lies
+//!   above `1 + min_effect` (builds: `min_effect_build`); they gate only when every row of run and baseline comes
+//!   from one machine (`machine_id`). A flagged configuration is measured again
 //!   (`confirm.csv`, see [`CheckOutcome::confirm`]) and fails only if the second measurement agrees;
 //! - **speedups** over the reference series, pooled over seeds like the figures' points, with a bootstrap
 //!   interval of `new / old`: always for information (a slowdown of shared code slows the reference most and
@@ -44,8 +45,12 @@ pub const TIMED_PHASES: [&str; 2] = ["trace_s", "build_s"];
 pub struct CheckOptions {
     /// Metric column the speedups are computed from (a time: smaller is better).
     pub metric: String,
-    /// Smallest relative change of a time or speedup that counts (0.10: 10%).
+    /// Smallest relative change of a trace time or a speedup that counts (0.10: 10%): a trace time regressed when
+    /// the 95% interval of its ratio new/old lies above `1 + min_effect`.
     pub min_effect: f64,
+    /// The same for build times (0.30: 30%): builds of a few milliseconds drift by up to 1.5× between runs of one
+    /// binary on this project's shared 2-vCPU machines, while their instruction counts gate at +2%.
+    pub min_effect_build: f64,
     /// Counter changes and configurations present on one side only do not fail the check.
     pub accept_counter_changes: bool,
     /// Timings are compared for information only and never fail the check, even from one machine.
@@ -57,11 +62,19 @@ pub struct CheckOptions {
     pub instruction_threshold: f64,
 }
 
+impl CheckOptions {
+    /// The minimum effect of a phase time (`build_s`: [`CheckOptions::min_effect_build`]; else `min_effect`).
+    pub fn time_effect(&self, metric: &str) -> f64 {
+        if metric == "build_s" { self.min_effect_build } else { self.min_effect }
+    }
+}
+
 impl Default for CheckOptions {
     fn default() -> Self {
         CheckOptions {
             metric: "trace_s".into(),
             min_effect: 0.10,
+            min_effect_build: 0.30,
             accept_counter_changes: false,
             timings_for_information: false,
             min_time_s: 1e-4,
