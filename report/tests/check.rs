@@ -419,6 +419,22 @@ fn instruction_counts_gate_above_the_threshold_from_one_compiler() {
     let one = compare_counted("counts-one-side", (&new, None), (&old, Some(&base)), &CheckOptions::default()).unwrap();
     assert!(!one.failed() && one.instructions.comparisons.is_empty());
     assert!(one.instructions.note.contains("the run has no instructions.csv"), "{}", one.instructions.note);
+    // Counts made at another commit than the run's rows are compared, and the note says so.
+    let stale: Vec<InstructionCount> = counts(1.0, RUSTC)
+        .into_iter()
+        .map(|c| InstructionCount { git_commit: "fedcba9876543210".into(), ..c })
+        .collect();
+    let noted = check("counts-stale", &stale, MACHINE);
+    assert!(!noted.failed(), "{}", noted.markdown());
+    assert!(
+        noted
+            .instructions
+            .note
+            .ends_with("(note: the run's counts were made at commit fedcba987654, its rows at 012345678901)"),
+        "{}",
+        noted.instructions.note
+    );
+    assert!(!little.instructions.note.contains("note:"), "{}", little.instructions.note);
     // A stricter threshold catches +1%.
     let strict = CheckOptions { instruction_threshold: 0.005, ..CheckOptions::default() };
     let little =

@@ -53,7 +53,10 @@ pub fn compare(
         Some(reference) => speedups(spec, reference, &new.runs, &old.runs, options),
         None => Vec::new(),
     };
-    let instructions = instructions::check(run_dir, baseline_dir, options.instruction_threshold)?;
+    let mut instructions = instructions::check(run_dir, baseline_dir, options.instruction_threshold)?;
+    if let Some(stale) = counted_elsewhere(run_dir, &new)? {
+        instructions.note.push_str(&format!(" (note: {stale})"));
+    }
     Ok(CheckOutcome {
         mode,
         counter_changes,
@@ -88,6 +91,21 @@ impl CheckOutcome {
         }
         Ok(())
     }
+}
+
+/// Whether the run folder's instruction counts were made at another commit than its rows (counted before a
+/// rebuild, or copied): says which, for the note.
+fn counted_elsewhere(run_dir: &Path, rows: &Rows) -> Result<Option<String>, Error> {
+    let path = run_dir.join(instructions::FILE);
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let counted: BTreeSet<String> = instructions::read(&path)?.into_iter().map(|c| c.git_commit).collect();
+    let timed: BTreeSet<String> = rows.runs.iter().map(|r| r.row.git_commit.clone()).collect();
+    let short =
+        |s: &BTreeSet<String>| s.iter().map(|c| c.chars().take(12).collect::<String>()).collect::<Vec<_>>().join("+");
+    Ok((counted != timed)
+        .then(|| format!("the run's counts were made at commit {}, its rows at {}", short(&counted), short(&timed))))
 }
 
 /// Same machine when every row of both files (failed ones included) has one and the same non-empty
