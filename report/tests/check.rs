@@ -39,6 +39,8 @@ struct Gen<'a> {
     machine: &'a str,
     /// `build_s` of this series is multiplied by the factor.
     build_slowdown: Option<(&'a str, f64)>,
+    /// `load_avg_1m` of every row (2 logical cores).
+    load: f64,
 }
 
 impl Default for Gen<'_> {
@@ -51,6 +53,7 @@ impl Default for Gen<'_> {
             objects: &OBJECTS,
             machine: MACHINE,
             build_slowdown: None,
+            load: 0.5,
         }
     }
 }
@@ -127,7 +130,7 @@ fn runs_csv(g: &Gen) -> String {
                         rustc: "rustc 1.91.0 (f8297e351 2025-10-28)".into(),
                         cpu_model: "Test CPU, 2 cores".into(),
                         logical_cores: 2,
-                        load_avg_1m: 0.5,
+                        load_avg_1m: g.load,
                         timestamp: "2025-11-22T03:00:00Z".into(),
                         harness_version: "0.1.0".into(),
                         validation: "exact".into(),
@@ -316,6 +319,18 @@ fn a_slower_reference_series_fails_on_one_machine_and_informs_across_two() {
     let none = compare("slow-reference-unknown", &unknown, &old_unknown, &CheckOptions::default()).unwrap();
     assert!(!none.failed() && !none.mode.gates_times(), "{:?}", none.mode);
     assert!(none.mode.line().contains("an unrecorded machine"), "{}", none.mode.line());
+    // A run measured on an overloaded machine (load 5.5 on 2 cores) is compared for information.
+    let overloaded = Gen { load: 5.5, ..Gen { noise_seed: 52, slowdown: Some(("brute", 1.2)), ..Gen::default() } };
+    let busy = compare("slow-reference-busy", &overloaded, &old, &CheckOptions::default()).unwrap();
+    assert!(!busy.failed() && !busy.mode.gates_times(), "{}", busy.markdown());
+    assert!(
+        busy.mode.line().starts_with(
+            "timing mode: information only: same machine (3f2a00c0ffee), but the run was measured overloaded \
+             (median 1-minute load 5.50 on 2 logical cores, above 2 per core)"
+        ),
+        "{}",
+        busy.mode.line()
+    );
 }
 
 #[test]

@@ -60,6 +60,9 @@ pub struct CheckOptions {
     pub min_time_s: f64,
     /// Largest relative growth of a phase's instruction count that passes (0.02: 2%).
     pub instruction_threshold: f64,
+    /// Times gate only where both sides' median 1-minute load average stays at or below this many per logical
+    /// core: an overloaded machine slows everything for minutes, a second measurement included.
+    pub max_load_per_core: f64,
 }
 
 impl CheckOptions {
@@ -79,6 +82,7 @@ impl Default for CheckOptions {
             timings_for_information: false,
             min_time_s: 1e-4,
             instruction_threshold: 0.02,
+            max_load_per_core: 2.0,
         }
     }
 }
