@@ -104,10 +104,10 @@ pub struct CheckArgs {
     /// Phases whose baseline median is shorter than this many seconds are compared for information only.
     #[arg(long, default_value_t = 1e-4)]
     pub min_time: f64,
-    /// Compare times for information only where either side's median 1-minute load average exceeded this many per
-    /// logical core (an overloaded machine slows every phase, its second measurement too).
-    #[arg(long, default_value_t = 2.0)]
-    pub max_load_per_core: f64,
+    /// Compare times for information only where the run's median 1-minute load average exceeds the baseline's by
+    /// more than this (more runnable tasks than cores slow every phase, its second measurement too).
+    #[arg(long, default_value_t = 1.0)]
+    pub max_extra_load: f64,
     /// Fail on a flagged time without measuring its configuration again.
     #[arg(long)]
     pub no_confirm: bool,

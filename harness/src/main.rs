@@ -163,7 +163,7 @@ fn check_command(args: &CheckArgs) -> Result<(), Error> {
         timings_for_information: args.timings_for_information,
         min_time_s: args.min_time,
         instruction_threshold: args.instruction_threshold,
-        max_load_per_core: args.max_load_per_core,
+        max_extra_load: args.max_extra_load,
     };
     check::run(&check::CheckRequest {
         run_dir: &args.run_dir,

@@ -319,14 +319,17 @@ fn a_slower_reference_series_fails_on_one_machine_and_informs_across_two() {
     let none = compare("slow-reference-unknown", &unknown, &old_unknown, &CheckOptions::default()).unwrap();
     assert!(!none.failed() && !none.mode.gates_times(), "{:?}", none.mode);
     assert!(none.mode.line().contains("an unrecorded machine"), "{}", none.mode.line());
-    // A run measured on an overloaded machine (load 5.5 on 2 cores) is compared for information.
-    let overloaded = Gen { load: 5.5, ..Gen { noise_seed: 52, slowdown: Some(("brute", 1.2)), ..Gen::default() } };
+    // A run measured at a load more than 1 above the baseline's (2.0 against 0.5) is compared for information;
+    // at 1.5 it still gates.
+    let busier = Gen { load: 1.5, ..Gen { noise_seed: 52, slowdown: Some(("brute", 1.2)), ..Gen::default() } };
+    assert!(compare("slow-reference-busier", &busier, &old, &CheckOptions::default()).unwrap().failed());
+    let overloaded = Gen { load: 2.0, ..busier };
     let busy = compare("slow-reference-busy", &overloaded, &old, &CheckOptions::default()).unwrap();
     assert!(!busy.failed() && !busy.mode.gates_times(), "{}", busy.markdown());
     assert!(
         busy.mode.line().starts_with(
-            "timing mode: information only: same machine (3f2a00c0ffee), but the run was measured overloaded \
-             (median 1-minute load 5.50 on 2 logical cores, above 2 per core)"
+            "timing mode: information only: same machine (3f2a00c0ffee), but the run was measured at a median \
+             1-minute load of 2.00, more than 1 above the baseline's 0.50"
         ),
         "{}",
         busy.mode.line()

@@ -47,7 +47,7 @@ pub fn compare(
     if common == 0 {
         return Err(mismatch(format!("no configuration in common with baseline {}", old_path.display())));
     }
-    let mode = timing_mode(&new, &old, options.timings_for_information, options.max_load_per_core);
+    let mode = timing_mode(&new, &old, options.timings_for_information, options.max_extra_load);
     let times = times(&describe, &new.runs, &old.runs, &mode, options);
     let speedups = match &spec.reference {
         Some(reference) => speedups(spec, reference, &new.runs, &old.runs, options),
@@ -109,9 +109,9 @@ fn counted_elsewhere(run_dir: &Path, rows: &Rows) -> Result<Option<String>, Erro
 }
 
 /// Same machine when every row of both files (failed ones included) has one and the same non-empty
-/// `machine_id`, and neither side was measured overloaded (a median `load_avg_1m` above `max_load_per_core` times
-/// its logical cores); else, or when `forced`, information only, saying why.
-fn timing_mode(new: &Rows, old: &Rows, forced: bool, max_load_per_core: f64) -> TimingMode {
+/// `machine_id`, and the run's median `load_avg_1m` exceeds the baseline's by at most `max_extra_load`; else, or
+/// when `forced`, information only, saying why.
+fn timing_mode(new: &Rows, old: &Rows, forced: bool, max_extra_load: f64) -> TimingMode {
     let ids = |rows: &Rows| -> BTreeSet<String> {
         rows.runs.iter().chain(&rows.failed).map(|r| r.row.machine_id.clone()).collect()
     };
@@ -131,18 +131,17 @@ fn timing_mode(new: &Rows, old: &Rows, forced: bool, max_load_per_core: f64) -> 
         (Some(id), 1, 1) if !id.is_empty() && n == o => id.clone(),
         _ => return TimingMode::Information { reason: format!("run on {}, baseline on {}", name(&n), name(&o)) },
     };
-    for (side, rows) in [("run", new), ("baseline", old)] {
-        let loads: Vec<f64> = rows.runs.iter().map(|r| r.row.load_avg_1m).filter(|l| l.is_finite()).collect();
-        let cores = rows.runs.first().map_or(0, |r| r.row.logical_cores);
-        let load = stats::median(&loads);
-        if cores > 0 && load > max_load_per_core * f64::from(cores) {
-            return TimingMode::Information {
-                reason: format!(
-                    "same machine ({machine_id}), but the {side} was measured overloaded (median 1-minute load {load:.2} \
-                     on {cores} logical cores, above {max_load_per_core} per core)"
-                ),
-            };
-        }
+    let load = |rows: &Rows| {
+        stats::median(&rows.runs.iter().map(|r| r.row.load_avg_1m).filter(|l| l.is_finite()).collect::<Vec<_>>())
+    };
+    let (new_load, old_load) = (load(new), load(old));
+    if new_load > old_load + max_extra_load {
+        return TimingMode::Information {
+            reason: format!(
+                "same machine ({machine_id}), but the run was measured at a median 1-minute load of {new_load:.2}, more \
+                 than {max_extra_load} above the baseline's {old_load:.2}"
+            ),
+        };
     }
     TimingMode::SameMachine { machine_id }
 }
