@@ -82,7 +82,11 @@ impl CheckOutcome {
             } else {
                 "instruction counts not gating".to_string()
             };
-            format!("{counted}; {gated} of {} phase times gated, none regressed; counters identical", self.times.len())
+            let times = match gated {
+                0 => format!("{} phase times for information", self.times.len()),
+                _ => format!("{gated} of {} phase times gated, none regressed", self.times.len()),
+            };
+            format!("{counted}; {times}; counters identical")
         } else {
             reasons.join("; ")
         }
