@@ -75,9 +75,7 @@ pub fn run(request: &CountRequest<'_>) -> Result<(), Error> {
     let exp = if request.quick { exp.quick() } else { exp };
     let plan = Plan::new(&exp, crate::render::available_threads())?;
     let valgrind = valgrind_version()?;
-    let dir = request.out.clone().unwrap_or_else(|| {
-        PathBuf::from("results").join(if request.quick { format!("{}-quick", exp.name) } else { exp.name.clone() })
-    });
+    let dir = request.out.clone().unwrap_or_else(|| crate::run::default_dir(&exp, request.quick));
     let io = |what: &str, p: &Path, e: std::io::Error| Error::Run(format!("{}: cannot {what}: {e}", p.display()));
     let copy = dir.join(CONFIG_COPY);
     match std::fs::read_to_string(&copy) {

@@ -15,7 +15,7 @@ mod render;
 mod rows;
 mod run;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::ExitCode;
 
 use clap::Parser;
@@ -94,9 +94,7 @@ fn write_report(dir: &Path, exp: &Experiment, notes: Vec<String>) -> Result<bool
 fn run_command(args: &RunArgs) -> Result<(), Error> {
     let exp = load(&args.config, args.quick)?;
     let mut plan = Plan::new(&exp, render::available_threads())?;
-    let mut dir = args.out.clone().unwrap_or_else(|| {
-        PathBuf::from("results").join(if args.quick { format!("{}-quick", exp.name) } else { exp.name.clone() })
-    });
+    let mut dir = args.out.clone().unwrap_or_else(|| run::default_dir(&exp, args.quick));
     if let Some((i, n)) = args.shard {
         plan.runs.retain(|r| r.config % n == i - 1);
         if args.out.is_none() {

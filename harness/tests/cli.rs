@@ -8,17 +8,11 @@ use std::time::{Duration, Instant};
 use schema::{Named, PeerKind};
 use tracer::accel::{AccelKind, Traversal};
 
-fn harness() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_harness"));
-    c.current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap());
-    c
-}
+mod common;
+use common::harness;
 
 fn temp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("bvhlab-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::temp("cli", name)
 }
 
 fn stderr(o: &Output) -> String {

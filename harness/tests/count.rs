@@ -4,17 +4,11 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn harness() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_harness"));
-    c.current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap());
-    c
-}
+mod common;
+use common::harness;
 
 fn temp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("bvhlab-count-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::temp("count", name)
 }
 
 fn text(o: &Output) -> String {

@@ -30,6 +30,12 @@ use worker::{Worker, WorkerRequest};
 pub const RUNS_CSV: &str = "runs.csv";
 pub const CONFIG_COPY: &str = "experiment.toml";
 
+/// Where a run of `exp` is recorded unless told otherwise: `results/<name>/`, or `results/<name>-quick/` for the
+/// config's quick form.
+pub fn default_dir(exp: &Experiment, quick: bool) -> std::path::PathBuf {
+    std::path::PathBuf::from("results").join(if quick { format!("{}-quick", exp.name) } else { exp.name.clone() })
+}
+
 /// Opens the row log in `dir`: continues it with `resume` (if it exists and was made by the same config
 /// text), else starts it over. Returns the runs already recorded.
 fn open_log(exp: &Experiment, dir: &Path, resume: bool) -> Result<(RowLog, HashSet<(String, u32)>), Error> {
