@@ -154,6 +154,14 @@ declare_columns! {
         /// 12 hex digits identifying the machine: a hash of every column from `cpu_model` to here, cores and rustc.
         /// Rows of different machines are never pooled into one point (empty: recorded before this column).
         machine_id: String, Provenance, added 2;
+        /// The shard this row ran in, `I/N` (`harness run --shard`; empty for an unsharded run).
+        shard: String, Provenance, added 3;
+        /// The Slurm job id it ran under (`SLURM_ARRAY_JOB_ID`, else `SLURM_JOB_ID`; empty outside Slurm).
+        slurm_job_id: String, Provenance, added 3;
+        /// The node it ran on: `SLURMD_NODENAME`, else the host name for a sharded run (empty otherwise).
+        node: String, Provenance, added 3;
+        /// 16 hex digits: hash of the `Cargo.lock` the harness was built with (empty: recorded before this column).
+        cargo_lock: String, Provenance, added 3;
     }
 }
 
