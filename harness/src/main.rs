@@ -124,10 +124,14 @@ fn run_command(args: &RunArgs) -> Result<(), Error> {
             dir = slurm::shard_dir(&dir, i, n);
         }
     }
+    let before: std::collections::BTreeSet<usize> = plan.runs.iter().map(|r| r.config).collect();
     skip_unavailable(&exp, &mut plan, args.require_all)?;
     if let Some((i, n)) = shard {
         let config = std::path::absolute(&args.config).unwrap_or_else(|_| args.config.clone());
-        let info = slurm::ShardInfo { shard: (i, n), config, config_hash: slurm::config_hash(&exp.text), quick: args.quick };
+        let skipped = before.iter().filter(|c| !plan.runs.iter().any(|r| r.config == **c));
+        let skipped = skipped.map(|c| plan.configurations[*c].id.clone()).collect();
+        let info =
+            slurm::ShardInfo { shard: (i, n), config, config_hash: slurm::config_hash(&exp.text), quick: args.quick, skipped };
         std::fs::create_dir_all(&dir).map_err(|e| Error::Input(format!("{}: cannot create: {e}", dir.display())))?;
         slurm::write_json(&dir.join(slurm::SHARD_JSON), &info)?;
     }

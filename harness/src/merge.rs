@@ -34,13 +34,14 @@ fn planned(plan: &Plan, shard_of: &[usize], i: usize) -> Vec<(String, u32)> {
 }
 
 /// The planned rows of shard `i` of `n` absent from `rows` (a configuration recorded as `FAILED` validation is
-/// never timed, so its one row completes it).
-fn absent(plan: &Plan, shard_of: &[usize], i: usize, rows: &[Row]) -> Vec<(String, u32)> {
+/// never timed, so its one row completes it; one `skipped` for want of its backend has none).
+fn absent(plan: &Plan, shard_of: &[usize], i: usize, rows: &[Row], skipped: &[String]) -> Vec<(String, u32)> {
     let done: HashSet<(&str, u32)> = rows.iter().map(|r| (r.config_id.as_str(), r.repetition)).collect();
-    let failed: HashSet<&str> = rows.iter().filter(|r| r.validation == "FAILED").map(|r| r.config_id.as_str()).collect();
+    let mut complete: HashSet<&str> = rows.iter().filter(|r| r.validation == "FAILED").map(|r| r.config_id.as_str()).collect();
+    complete.extend(skipped.iter().map(String::as_str));
     planned(plan, shard_of, i)
         .into_iter()
-        .filter(|(id, rep)| !failed.contains(id.as_str()) && !done.contains(&(id.as_str(), *rep)))
+        .filter(|(id, rep)| !complete.contains(id.as_str()) && !done.contains(&(id.as_str(), *rep)))
         .collect()
 }
 
@@ -49,7 +50,9 @@ pub fn missing_rows(plan: &Plan, dir: &Path, i: usize, n: usize) -> Result<usize
     let shard_of = shard::assign(plan, n);
     let path = dir.join(RUNS_CSV);
     let rows = if path.is_file() { read_log(&path)? } else { Vec::new() };
-    Ok(absent(plan, &shard_of, i, &rows).len())
+    let info = dir.join(SHARD_JSON);
+    let skipped = if info.is_file() { read_json::<ShardInfo>(&info)?.skipped } else { Vec::new() };
+    Ok(absent(plan, &shard_of, i, &rows, &skipped).len())
 }
 
 /// The shard folders of `run_dir`: N and their paths by I.
@@ -224,7 +227,7 @@ pub fn run(run_dir: &Path, allow_mixed_machines: bool) -> Result<(), Error> {
                 )));
             }
         }
-        let absent = absent(&plan, &shard_of, s.i, &s.rows);
+        let absent = absent(&plan, &shard_of, s.i, &s.rows, &s.info.skipped);
         if let Some((id, rep)) = absent.first() {
             let series = &plan.configurations[index[id.as_str()]].series;
             return Err(Error::Input(format!(
@@ -272,6 +275,10 @@ pub fn run(run_dir: &Path, allow_mixed_machines: bool) -> Result<(), Error> {
         note.push_str(&format!("; Slurm jobs {}", jobs.into_iter().collect::<Vec<_>>().join(", ")));
     }
     note.push_str(&format!("; machines: {}.", described.join(", ")));
+    let skipped: usize = shards.iter().map(|s| s.info.skipped.len()).sum();
+    if skipped > 0 {
+        note.push_str(&format!(" {skipped} configurations were skipped where their backend was unavailable (Embree)."));
+    }
     let warnings = if machines.len() > 1 {
         vec![format!(
             "this result set merges rows of {} different machines (`--allow-mixed-machines`): {}. Times of different \

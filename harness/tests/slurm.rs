@@ -274,6 +274,17 @@ fn merge_equals_the_unsharded_run_and_refuses_bad_shards() {
     assert!(md.contains("> **Warning:** this result set merges rows of 2 different machines"), "{md}");
     assert!(md.contains("## Across machines"), "{md}");
 
+    // A configuration skipped for want of its backend (Embree) on a node is not missing.
+    let run = case("skipped", &|r| {
+        let id = first_row(r, 1).split(',').nth(1).unwrap().to_string();
+        edit(r.join("shard-1-of-3/runs.csv"), &|t| t.lines().filter(|l| !l.contains(&id)).map(|l| format!("{l}\n")).collect());
+        refused(&merge(r, &[]), r, "shard 1 of 3 lacks 2 of its");
+        edit(r.join("shard-1-of-3/shard.json"), &|t| t.replace("\"skipped\": []", &format!("\"skipped\": [\"{id}\"]")));
+    });
+    let o = merge(&run, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(std::fs::read_to_string(run.join("REPORT.md")).unwrap().contains("1 configurations were skipped"));
+
     let run = case("other-config", &|r| edit(r.join("shard-2-of-3/experiment.toml"), &|t| t.replace("repetitions = 2", "repetitions = 3")));
     refused(&merge(&run, &[]), &run, "differs from the");
     let _ = std::fs::remove_dir_all(&dir);

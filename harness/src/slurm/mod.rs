@@ -40,6 +40,9 @@ pub struct ShardInfo {
     pub config_hash: String,
     /// Whether the config's [quick] overrides applied.
     pub quick: bool,
+    /// Configurations of the shard skipped because their backend is unavailable there (Embree): not planned rows.
+    #[serde(default)]
+    pub skipped: Vec<String>,
 }
 
 /// One submission of the array and its merge job.
