@@ -135,6 +135,11 @@ fn read_shards(run_dir: &Path) -> Result<Vec<Shard>, Error> {
     Ok(shards)
 }
 
+/// `1, 2, 5`.
+fn list(shards: &BTreeSet<usize>) -> String {
+    shards.iter().map(usize::to_string).collect::<Vec<_>>().join(", ")
+}
+
 /// Fails when `column` takes more than one value over the shards' rows, naming them and their shards.
 fn agree(run_dir: &Path, shards: &[Shard], column: &str, what: &str) -> Result<(), Error> {
     let mut values: BTreeMap<String, BTreeSet<usize>> = BTreeMap::new();
@@ -144,11 +149,11 @@ fn agree(run_dir: &Path, shards: &[Shard], column: &str, what: &str) -> Result<(
         }
     }
     if values.len() > 1 {
-        let list: Vec<String> = values.iter().map(|(v, shards)| format!("{v:?} (shards {shards:?})")).collect();
+        let each: Vec<String> = values.iter().map(|(v, shards)| format!("{v:?} (shards {})", list(shards))).collect();
         return Err(Error::Input(format!(
             "{}: shards come from different {what}: {column} {} (allowed: one; rerun the odd shards with one build)",
             run_dir.display(),
-            list.join(", ")
+            each.join(", ")
         )));
     }
     Ok(())
@@ -248,7 +253,7 @@ pub fn run(run_dir: &Path, allow_mixed_machines: bool) -> Result<(), Error> {
         .iter()
         .map(|(id, (model, nodes, shards))| {
             let nodes = nodes.iter().cloned().collect::<Vec<_>>().join(", ");
-            format!("{id} ({model}; nodes {nodes}; shards {shards:?})")
+            format!("{id} ({model}; nodes {nodes}; shards {})", list(shards))
         })
         .collect();
     if machines.len() > 1 && !allow_mixed_machines {
