@@ -1,4 +1,4 @@
-//! Records the compiler version for the provenance of every row.
+//! Records the compiler version and the hash of the workspace's `Cargo.lock` for the provenance of every row.
 
 fn main() {
     let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
@@ -9,6 +9,17 @@ fn main() {
         .and_then(|o| String::from_utf8(o.stdout).ok())
         .map_or_else(|| "unknown".to_string(), |s| s.trim().to_string());
     println!("cargo:rustc-env=BVHLAB_RUSTC_VERSION={version}");
+    // FNV-1a 64 of Cargo.lock: shards merged into one result set must come from builds of one dependency set.
+    let lock = std::path::Path::new(&std::env::var("CARGO_MANIFEST_DIR").unwrap()).join("../Cargo.lock");
+    let hash = std::fs::read(&lock).map_or_else(
+        |_| "unknown".to_string(),
+        |bytes| {
+            let h = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3));
+            format!("{h:016x}")
+        },
+    );
+    println!("cargo:rustc-env=BVHLAB_CARGO_LOCK_HASH={hash}");
     println!("cargo:rerun-if-changed=build.rs");
+    println!("cargo:rerun-if-changed={}", lock.display());
     println!("cargo:rerun-if-env-changed=RUSTC");
 }

@@ -41,6 +41,13 @@ pub enum Command {
     /// Manage stored baselines.
     #[command(subcommand)]
     Baseline(BaselineCommand),
+    /// Run a sweep as a Slurm job array, one shard per task, and merge the shards when it ends.
+    #[command(subcommand)]
+    Slurm(SlurmCommand),
+    /// Merge the shard folders of a run folder into its runs.csv and rebuild summaries, figures and REPORT.md.
+    Merge(MergeArgs),
+    /// Compare the rows of two runs.csv files (or run folders), in any order; exit 1 when they differ.
+    RowsDiff(RowsDiffArgs),
     /// Track speedups over commits.
     #[command(subcommand)]
     History(HistoryCommand),
@@ -63,9 +70,15 @@ pub struct RunArgs {
     /// Continue a killed sweep: skip runs already recorded in the output folder.
     #[arg(long)]
     pub resume: bool,
-    /// Run only configurations I of N (1-based), e.g. 2/4, to spread a sweep over machines.
+    /// Run only shard I of N (1-based), e.g. 2/4, to spread a sweep over machines (whole scene cells per shard);
+    /// `env` reads it from SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT, `env/N` from SLURM_ARRAY_TASK_ID or
+    /// JOB_COMPLETION_INDEX (a Kubernetes indexed Job) with N shards.
     #[arg(long, value_parser = parse_shard)]
-    pub shard: Option<(usize, usize)>,
+    pub shard: Option<ShardArg>,
+    /// Refuse to run unless the config's text has this hash (16 hex digits; job scripts pin the config they were
+    /// submitted with).
+    #[arg(long)]
+    pub config_hash: Option<String>,
     /// Exit with code 1 when a claim of the config fails.
     #[arg(long)]
     pub check_claims: bool,
@@ -198,11 +211,98 @@ pub enum BaselineCommand {
     },
 }
 
-fn parse_shard(s: &str) -> Result<(usize, usize), String> {
-    let bad = || format!("{s:?} is not a shard (allowed: I/N with 1 <= I <= N, e.g. 2/4)");
+/// `--shard`: a fixed shard, or one read from the environment of a job array.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShardArg {
+    /// Shard I of N (1-based).
+    Fixed(usize, usize),
+    /// From the environment, with the shard count if given (`env/N`).
+    Env(Option<usize>),
+}
+
+/// Parses `I/N`, `env` or `env/N`.
+pub fn parse_shard(s: &str) -> Result<ShardArg, String> {
+    let bad = || format!("{s:?} is not a shard (allowed: I/N with 1 <= I <= N, e.g. 2/4; env; env/N with N >= 1)");
+    if s == "env" {
+        return Ok(ShardArg::Env(None));
+    }
     let (i, n) = s.split_once('/').ok_or_else(bad)?;
-    let (i, n): (usize, usize) = (i.parse().map_err(|_| bad())?, n.parse().map_err(|_| bad())?);
-    if i >= 1 && i <= n { Ok((i, n)) } else { Err(bad()) }
+    let n: usize = n.parse().map_err(|_| bad())?;
+    if i == "env" {
+        return if n >= 1 { Ok(ShardArg::Env(Some(n))) } else { Err(bad()) };
+    }
+    let i: usize = i.parse().map_err(|_| bad())?;
+    if i >= 1 && i <= n { Ok(ShardArg::Fixed(i, n)) } else { Err(bad()) }
+}
+
+#[derive(Subcommand, Debug)]
+pub enum SlurmCommand {
+    /// Write and submit a job array (one shard per task) and a merge job that runs when the array ends.
+    Submit(SubmitArgs),
+    /// Submit again only the shards of a submitted run folder that are missing rows (failed, cancelled, timed out).
+    Resubmit {
+        /// The run folder (holding slurm/jobs.json).
+        run_dir: PathBuf,
+        /// Print the job scripts and the shards to run; submit nothing.
+        #[arg(long)]
+        dry_run: bool,
+    },
+}
+
+#[derive(Args, Debug)]
+pub struct SubmitArgs {
+    /// Experiment config (TOML).
+    pub config: PathBuf,
+    /// Number of shards (array tasks); at most the number of scene cells of the plan.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub shards: u32,
+    /// Array tasks running at once (`--array=...%K`; default: all shards).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub max_parallel: Option<u32>,
+    /// Slurm partition.
+    #[arg(long)]
+    pub partition: Option<String>,
+    /// Slurm node constraint (features), e.g. `avx512` to keep every shard on one kind of machine.
+    #[arg(long)]
+    pub constraint: Option<String>,
+    /// Time limit of each array task, in any format sbatch takes (e.g. 30, 1:00:00).
+    #[arg(long)]
+    pub time: Option<String>,
+    /// Apply the config's [quick] overrides.
+    #[arg(long)]
+    pub quick: bool,
+    /// Share nodes with other jobs (default: each task has its node to itself, `--exclusive`).
+    #[arg(long)]
+    pub no_exclusive: bool,
+    /// Let the merge job pool shards of different machines into one result set (REPORT.md then warns).
+    #[arg(long)]
+    pub allow_mixed_machines: bool,
+    /// The run folder (default: results/<name>/, or results/<name>-quick/ with --quick).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Print the job scripts; write and submit nothing.
+    #[arg(long)]
+    pub dry_run: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct MergeArgs {
+    /// The run folder holding shard-I-of-N/ folders.
+    pub run_dir: PathBuf,
+    /// Merge rows recorded on different machines (their times stay apart; REPORT.md carries a warning).
+    #[arg(long)]
+    pub allow_mixed_machines: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct RowsDiffArgs {
+    /// A runs.csv, or a run folder holding one.
+    pub a: PathBuf,
+    /// The other runs.csv or run folder.
+    pub b: PathBuf,
+    /// Compare every column but timings and the per-run provenance (load, time stamp, shard, job, node).
+    #[arg(long)]
+    pub ignore_timing: bool,
 }
 
 #[derive(Args, Debug)]

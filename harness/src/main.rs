@@ -8,12 +8,14 @@ mod config;
 mod count;
 mod error;
 mod list;
+mod merge;
 mod output;
 mod peers;
 mod plan;
 mod render;
 mod rows;
 mod run;
+mod slurm;
 
 use std::path::Path;
 use std::process::ExitCode;
@@ -21,7 +23,7 @@ use std::process::ExitCode;
 use clap::Parser;
 use report::spec::Verdict;
 
-use cli::{BaselineCommand, CheckArgs, Command, HistoryCommand, ReportArgs, RunArgs, ValidateArgs};
+use cli::{BaselineCommand, CheckArgs, Command, HistoryCommand, ReportArgs, RunArgs, SlurmCommand, ValidateArgs};
 use config::Experiment;
 use error::Error;
 use plan::Plan;
@@ -58,6 +60,10 @@ fn main() -> ExitCode {
         Command::Baseline(BaselineCommand::Save { run_dir, name, force }) => baseline::save(&run_dir, &name, force).map(|dest| {
             println!("baseline saved: {}", dest.display());
         }),
+        Command::Slurm(SlurmCommand::Submit(args)) => slurm::submit(&args),
+        Command::Slurm(SlurmCommand::Resubmit { run_dir, dry_run }) => slurm::resubmit(&run_dir, dry_run),
+        Command::Merge(args) => merge::run(&args.run_dir, args.allow_mixed_machines),
+        Command::RowsDiff(args) => rows::diff::run(&args.a, &args.b, args.ignore_timing),
         Command::List => {
             list::run();
             Ok(())
@@ -79,7 +85,13 @@ fn load(path: &Path, quick: bool) -> Result<Experiment, Error> {
 
 /// Writes the report of `dir` and prints its claims; returns whether any claim failed.
 fn write_report(dir: &Path, exp: &Experiment, notes: Vec<String>) -> Result<bool, Error> {
-    let outcome = report::write(dir, &exp.report_spec(notes)).map_err(|e| Error::Run(e.to_string()))?;
+    write_report_with(dir, exp, notes, vec![])
+}
+
+/// [`write_report`] with warnings for the top of REPORT.md.
+fn write_report_with(dir: &Path, exp: &Experiment, notes: Vec<String>, warnings: Vec<String>) -> Result<bool, Error> {
+    let spec = report::spec::ReportSpec { warnings, ..exp.report_spec(notes) };
+    let outcome = report::write(dir, &spec).map_err(|e| Error::Run(e.to_string()))?;
     for c in &outcome.claims {
         let verdict = match c.verdict {
             Verdict::Holds => "holds",
@@ -93,17 +105,44 @@ fn write_report(dir: &Path, exp: &Experiment, notes: Vec<String>) -> Result<bool
 }
 
 fn run_command(args: &RunArgs) -> Result<(), Error> {
+    let shard = args.shard.map(|a| slurm::env::resolve(a, |k| std::env::var(k).ok())).transpose()?;
     let exp = load(&args.config, args.quick)?;
-    let mut plan = Plan::new(&exp, render::available_threads())?;
-    let mut dir = args.out.clone().unwrap_or_else(|| run::default_dir(&exp, args.quick));
-    if let Some((i, n)) = args.shard {
-        plan.runs.retain(|r| r.config % n == i - 1);
-        if args.out.is_none() {
-            dir = dir.join(format!("shard-{i}-of-{n}"));
+    if let Some(want) = &args.config_hash {
+        let have = slurm::config_hash(&exp.text);
+        if *want != have {
+            return Err(Error::Input(format!(
+                "{}: config hash {have}, but --config-hash {want}: the config changed since the job was written \
+                 (allowed: the config as submitted)",
+                exp.path.display()
+            )));
         }
     }
+    let mut plan = Plan::new(&exp, render::available_threads())?;
+    let mut dir = args.out.clone().unwrap_or_else(|| run::default_dir(&exp, args.quick));
+    if let Some((i, n)) = shard {
+        plan.keep_shard(i, n);
+        if args.out.is_none() {
+            dir = slurm::shard_dir(&dir, i, n);
+        }
+    }
+    let before: std::collections::BTreeSet<usize> = plan.runs.iter().map(|r| r.config).collect();
     skip_unavailable(&exp, &mut plan, args.require_all)?;
+    if let Some((i, n)) = shard {
+        let config = std::path::absolute(&args.config).unwrap_or_else(|_| args.config.clone());
+        let skipped = before.iter().filter(|c| !plan.runs.iter().any(|r| r.config == **c));
+        let skipped = skipped.map(|c| plan.configurations[*c].id.clone()).collect();
+        let info =
+            slurm::ShardInfo { shard: (i, n), config, config_hash: slurm::config_hash(&exp.text), quick: args.quick, skipped };
+        std::fs::create_dir_all(&dir).map_err(|e| Error::Input(format!("{}: cannot create: {e}", dir.display())))?;
+        slurm::write_json(&dir.join(slurm::SHARD_JSON), &info)?;
+    }
     run::sweep(&exp, &plan, &dir, args.resume)?;
+    if let Some((i, n)) = shard {
+        if plan.runs.is_empty() {
+            println!("shard {i} of {n} is empty (the plan has fewer scene cells than shards): nothing to run");
+            return Ok(());
+        }
+    }
     let failed = write_report(&dir, &exp, plan.notes.clone())?;
     if failed && args.check_claims {
         return Err(Error::Run("a claim failed (see the claims above and REPORT.md)".into()));

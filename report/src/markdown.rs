@@ -16,6 +16,9 @@ pub fn report(rows: &Rows, spec: &ReportSpec, claims: &[ClaimResult]) -> String 
     if !spec.description.trim().is_empty() {
         let _ = writeln!(md, "{}\n", spec.description.trim());
     }
+    for warning in &spec.warnings {
+        let _ = writeln!(md, "> **Warning:** {}\n", cell(warning));
+    }
     if !rows.failed.is_empty() {
         md.push_str("## ⚠ VALIDATION FAILURES
 
@@ -52,6 +55,7 @@ pub fn report(rows: &Rows, spec: &ReportSpec, claims: &[ClaimResult]) -> String 
     figures(&mut md, spec);
     claims_table(&mut md, spec, claims);
     summary_table(&mut md, rows, spec);
+    across_machines(&mut md, rows, spec);
     md.push_str("## Config as run\n\n```toml\n");
     md.push_str(spec.config_text.trim_end());
     md.push_str("\n```\n\n## Regenerate\n\n");
@@ -275,6 +279,71 @@ fn summary_table(md: &mut String, rows: &Rows, spec: &ReportSpec) {
                 None => "—".into(),
             });
         }
+        let _ = writeln!(md, "| {} |", cells.join(" | "));
+    }
+    md.push('\n');
+}
+
+/// Where rows come from several machines: each configuration's speedup on every machine (taken against the
+/// reference's runs on that machine) and their geometric mean.
+fn across_machines(md: &mut String, rows: &Rows, spec: &ReportSpec) {
+    let runs = &rows.runs;
+    let machines: BTreeSet<&str> = runs.iter().map(|r| r.text("machine_id")).filter(|m| !m.is_empty()).collect();
+    let Some(reference) = &spec.reference else { return };
+    if machines.len() < 2 {
+        return;
+    }
+    let varying: Vec<&str> = POINT
+        .iter()
+        .copied()
+        .filter(|c| *c != "seed" && *c != "machine_id")
+        .filter(|c| runs.iter().map(|r| r.text(c)).collect::<BTreeSet<_>>().len() > 1)
+        .collect();
+    md.push_str("## Across machines
+
+");
+    let _ = writeln!(
+        md,
+        "Rows come from {} machines. Speedups over {reference} are taken within each machine (against the reference's \
+         runs on that machine), then combined across machines as the **geometric mean** of the per-machine speedups; \
+         absolute times of different machines are never pooled.\n",
+        machines.len()
+    );
+    let mut header = vec!["series".to_string()];
+    header.extend(varying.iter().map(|c| c.to_string()));
+    header.extend(["speedup per machine", "machines", "geometric mean"].map(String::from));
+    let _ = writeln!(md, "| {} |", header.join(" | "));
+    let _ = writeln!(md, "|{}", "---|".repeat(header.len()));
+    // Seed pools (one machine each) grouped by everything but the machine.
+    let mut groups: Vec<(Vec<String>, Vec<Vec<&Run>>)> = Vec::new();
+    for pool in pool::seed_pools(runs) {
+        let key = schema::row::pool_key(pool[0].series(), |c| if c == "machine_id" { String::new() } else { pool[0].text(c).to_string() });
+        match groups.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, pools)) => pools.push(pool),
+            None => groups.push((key, vec![pool])),
+        }
+    }
+    for (_, pools) in groups {
+        let first = pools[0][0];
+        let metric = spec.speedup_metric_of(first.text("workload"));
+        let per_machine: Vec<(String, f64)> = pools
+            .iter()
+            .filter_map(|group| {
+                let key = format!("{}|{}|machine speedup", group[0].config_id(), group[0].text("machine_id"));
+                let e = pool::ratio_against(spec, runs, reference, group, metric, &["seed"], &key)?;
+                Some((group[0].text("machine_id").to_string(), e.value))
+            })
+            .filter(|(_, v)| v.is_finite() && *v > 0.0)
+            .collect();
+        if per_machine.is_empty() {
+            continue;
+        }
+        let geomean = (per_machine.iter().map(|(_, v)| v.ln()).sum::<f64>() / per_machine.len() as f64).exp();
+        let mut cells = vec![format!("`{}`", cell(first.series()))];
+        cells.extend(varying.iter().map(|c| cell(first.text(c))));
+        cells.push(per_machine.iter().map(|(m, v)| format!("`{m}` {}", num(*v))).collect::<Vec<_>>().join(", "));
+        cells.push(per_machine.len().to_string());
+        cells.push(num(geomean));
         let _ = writeln!(md, "| {} |", cells.join(" | "));
     }
     md.push('\n');

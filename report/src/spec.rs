@@ -25,6 +25,8 @@ pub struct ReportSpec {
     pub config_text: String,
     /// Notes the harness wants in the report (skipped series, thread counts above the core count, …).
     pub notes: Vec<String>,
+    /// Warnings for the top of the report (e.g. a merge of several machines' rows).
+    pub warnings: Vec<String>,
 }
 
 impl ReportSpec {

@@ -73,6 +73,7 @@ fn spec() -> ReportSpec {
         ],
         config_text: "name = \"golden\"\n[[series]]\nlabel = \"serial·list\"\n".into(),
         notes: vec!["a note from the harness".into()],
+        warnings: vec![],
     }
 }
 
@@ -300,6 +301,12 @@ fn rows_of_two_machines_are_never_pooled() {
         md.lines().filter(|l| l.starts_with("| serial·bvh |")).map(|l| l.rsplit(" | ").nth(1).unwrap()).collect();
     assert_eq!(speedups.len(), 4, "2 object counts x 2 machines: {md}");
     assert_eq!(speedups[0].split(' ').next(), speedups[2].split(' ').next(), "{speedups:?}");
+    // Combined across machines as a geometric mean of the per-machine speedups (equal here, so the mean is that).
+    assert!(md.contains("## Across machines") && md.contains("**geometric mean**"), "{md}");
+    let across: Vec<&str> = md.lines().filter(|l| l.starts_with("| `serial·bvh` |")).collect();
+    assert_eq!(across.len(), 2, "one line per object count: {md}");
+    // Both machines are 2x apart in every time, so each machine's speedup, and their geometric mean, is the list's 4x.
+    assert!(across[0].contains("| `aaaaaaaaaaaa` 4.000, `bbbbbbbbbbbb` 4.000 | 2 | 4.000 |"), "{}", across[0]);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -156,7 +156,15 @@ declare_columns! {
         machine_id: String, Provenance, added 2;
         /// The kernel's random id of the boot the run happened in (`/proc/sys/kernel/random/boot_id`, empty elsewhere):
         /// virtual machines of one kind share every fact in `machine_id`, so absolute times gate only within one boot.
-        boot_id: String, Provenance, added 2;
+        boot_id: String, Provenance, added 3;
+        /// The shard this row ran in, `I/N` (`harness run --shard`; empty for an unsharded run).
+        shard: String, Provenance, added 3;
+        /// The Slurm job id it ran under (`SLURM_ARRAY_JOB_ID`, else `SLURM_JOB_ID`; empty outside Slurm).
+        slurm_job_id: String, Provenance, added 3;
+        /// The node it ran on: `SLURMD_NODENAME`, else the host name for a sharded run (empty otherwise).
+        node: String, Provenance, added 3;
+        /// 16 hex digits: hash of the `Cargo.lock` the harness was built with (empty: recorded before this column).
+        cargo_lock: String, Provenance, added 3;
     }
 }
 

@@ -249,6 +249,7 @@ impl Experiment {
             claims: self.claims.clone(),
             config_text: self.text.clone(),
             notes,
+            warnings: vec![],
         }
     }
 }

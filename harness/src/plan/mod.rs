@@ -6,6 +6,7 @@
 
 mod estimate;
 mod order;
+pub mod shard;
 
 use std::collections::HashSet;
 use std::sync::Arc;
@@ -46,6 +47,8 @@ pub struct Plan {
     pub sphere_file: Option<SphereFile>,
     /// Things the report should say about the plan (e.g. threads above the core count).
     pub notes: Vec<String>,
+    /// The shard `(I, N)` this plan was cut to (see [`shard`]), if any.
+    pub shard: Option<(usize, usize)>,
 }
 
 /// A sphere file and its spheres.
@@ -154,7 +157,7 @@ impl Plan {
             ));
         }
         let runs = order::runs(exp, configurations.len());
-        Ok(Plan { configurations, runs, sphere_file, notes })
+        Ok(Plan { configurations, runs, sphere_file, notes, shard: None })
     }
 
     /// The sphere file's scene, if the plan has one.

@@ -5,6 +5,8 @@
 //! complete lines plus at most one partial last line; [`RowLog::resume`] cuts that line off and reports
 //! which runs are done.
 
+pub mod diff;
+
 use std::collections::HashSet;
 use std::fs::{File, OpenOptions};
 use std::io::{self, Read, Seek, SeekFrom, Write};

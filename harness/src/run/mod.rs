@@ -121,6 +121,7 @@ fn row(
     p: &Provenance,
     load: f64,
     timestamp: String,
+    shard: Option<(usize, usize)>,
 ) -> Row {
     let w = &v.counters;
     let (nodes, boxes, prims) = w.per_ray();
@@ -176,6 +177,14 @@ fn row(
     row.target_features = m.target_features.clone();
     row.machine_id = m.machine_id.clone();
     row.boot_id = m.boot_id.clone();
+    row.cargo_lock = p.cargo_lock.clone();
+    row.slurm_job_id = p.slurm_job_id.clone();
+    if let Some((i, n)) = shard {
+        row.shard = format!("{i}/{n}");
+        row.node = if p.node.is_empty() { provenance::hostname() } else { p.node.clone() };
+    } else {
+        row.node = p.node.clone();
+    }
     row.rounded()
 }
 
@@ -234,7 +243,7 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<
                     }
                 );
                 let untimed = Timing::untimed(v.output_hash);
-                log.append(&row(exp, c, 0, &untimed, &v, &provenance, load_average_1m(), timestamp_now()))
+                log.append(&row(exp, c, 0, &untimed, &v, &provenance, load_average_1m(), timestamp_now(), plan.shard))
                     .map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))?;
                 failed.insert(run.config);
                 progress.finished(&format!("{} FAILED validation", describe(c)));
@@ -278,7 +287,7 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<
                 timing.output_hash
             )));
         }
-        log.append(&row(exp, c, rep, &timing, v, &provenance, load, ts))
+        log.append(&row(exp, c, rep, &timing, v, &provenance, load, ts, plan.shard))
             .map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))?;
         progress.finished(&format!("{} rep {rep}: {:.3} s", describe(c), timing.total_s()));
     }
@@ -306,7 +315,7 @@ mod tests {
             rays: 786_432,
         };
         let row =
-            row(&exp, &plan.configurations[0], 0, &Timing::untimed(1), &v, &Provenance::collect(), 0.5, "t".into());
+            row(&exp, &plan.configurations[0], 0, &Timing::untimed(1), &v, &Provenance::collect(), 0.5, "t".into(), None);
         assert_eq!((row.validation.as_str(), row.mismatches), ("FAILED", 3));
         assert_eq!((row.grazing, row.reference_checked, row.wrong_side.as_str()), (2, 16_384, "backend"));
         let text = format!("{}\n{}", schema::row::header(), schema::row::csv_line(&row).unwrap());

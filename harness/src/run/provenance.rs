@@ -13,6 +13,12 @@ pub struct Provenance {
     pub logical_cores: usize,
     pub harness_version: String,
     pub machine: Machine,
+    /// FNV-1a hash of the `Cargo.lock` the harness was built with.
+    pub cargo_lock: String,
+    /// The Slurm job (`SLURM_ARRAY_JOB_ID`, else `SLURM_JOB_ID`; empty outside Slurm).
+    pub slurm_job_id: String,
+    /// `SLURMD_NODENAME` (empty outside Slurm; a sharded run fills in the host name).
+    pub node: String,
 }
 
 /// The instruction-set extensions rows report, as `/proc/cpuinfo` flags and as Rust target features.
@@ -171,8 +177,26 @@ impl Provenance {
             cpu_model,
             logical_cores,
             harness_version: env!("CARGO_PKG_VERSION").to_string(),
+            cargo_lock: env!("BVHLAB_CARGO_LOCK_HASH").to_string(),
+            slurm_job_id: ["SLURM_ARRAY_JOB_ID", "SLURM_JOB_ID"].iter().find_map(|v| env_var(v)).unwrap_or_default(),
+            node: env_var("SLURMD_NODENAME").unwrap_or_default(),
         }
     }
+}
+
+/// A non-empty environment variable.
+fn env_var(name: &str) -> Option<String> {
+    std::env::var(name).ok().filter(|v| !v.is_empty())
+}
+
+/// This machine's host name (`/proc/sys/kernel/hostname`, else `$HOSTNAME`, else `unknown`).
+pub fn hostname() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .ok()
+        .map(|s| s.trim().to_string())
+        .filter(|s| !s.is_empty())
+        .or_else(|| env_var("HOSTNAME"))
+        .unwrap_or_else(|| "unknown".into())
 }
 
 /// The 1-minute load average (NaN where `/proc/loadavg` does not exist).
