@@ -1,4 +1,7 @@
-//! Records the compiler version and the hash of the workspace's `Cargo.lock` for the provenance of every row.
+//! Records the compiler version and the hash of the workspace's `Cargo.lock` for the provenance of every row, and
+//! the hash of the sources it builds (`src/source_tree.rs`), by which `harness ab` knows this binary's revision.
+
+include!("src/source_tree.rs");
 
 fn main() {
     let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
@@ -22,4 +25,10 @@ fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-changed={}", lock.display());
     println!("cargo:rerun-if-env-changed=RUSTC");
+    let root = std::path::Path::new(&std::env::var("CARGO_MANIFEST_DIR").unwrap()).join("..");
+    println!("cargo:rustc-env=BVHLAB_SOURCE_HASH={:016x}", source_hash(&root));
+    // Cargo scans a folder for changes as a whole. (A missing path would rerun the script on every build.)
+    for entry in SOURCES.iter().map(|e| root.join(e)).filter(|p| p.exists()) {
+        println!("cargo:rerun-if-changed={}", entry.display());
+    }
 }

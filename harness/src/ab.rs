@@ -335,6 +335,13 @@ fn base_binary(root: &Path, build: &Build, rev: &str) -> Result<PathBuf, Error> 
         eprintln!("ab: base {}: {} (built before)", &rev[..12], cache.display());
         return Ok(cache);
     }
+    if let Some(why) = running_is_build_of(root, rev) {
+        fs::copy("/proc/self/exe", &cache)
+            .or_else(|_| fs::copy(build.uplifted(), &cache))
+            .map_err(|e| Error::Run(format!("{}: {e}", cache.display())))?;
+        eprintln!("ab: base {}: this binary, copied to {} ({why})", &rev[..12], cache.display());
+        return Ok(cache);
+    }
     eprintln!("ab: building {rev} into {} (its workspace crates only)", build.target.display());
     let mut uplifted = Uplifted::save(build, &ab);
     for _ in 0..3 {
@@ -349,6 +356,28 @@ fn base_binary(root: &Path, build: &Build, rev: &str) -> Result<PathBuf, Error> 
         }
     }
     Err(Error::Run(format!("building {rev}: other base builds kept replacing this one's workspace crates; run again")))
+}
+
+/// Why the running binary is `rev`'s build, if it is: it was built from the working tree as it is now (the
+/// hash its build script took of the sources equals theirs now), and the working tree's sources are `rev`'s (no
+/// change, untracked or ignored file among them, and `rev`'s are HEAD's). Building `rev` would compile the same
+/// sources with the same compiler and profile again.
+fn running_is_build_of(root: &Path, rev: &str) -> Option<String> {
+    let built = env!("BVHLAB_SOURCE_HASH");
+    let now = format!("{:016x}", crate::source_tree::source_hash(root));
+    if now != built {
+        return None;
+    }
+    let sources: Vec<&str> = crate::source_tree::SOURCES.to_vec();
+    let status = git(root, &[&["status", "--porcelain", "--untracked-files=all", "--ignored", "--"], &sources[..]].concat());
+    let same_as_head = status.ok()?.is_empty();
+    let diff = Command::new("git")
+        .current_dir(root)
+        .args([&["diff", "--quiet", "HEAD", rev, "--"], &sources[..]].concat())
+        .status()
+        .ok()?;
+    (same_as_head && diff.success())
+        .then(|| format!("built from sources {built}, the working tree's, which are {}'s", &rev[..12]))
 }
 
 /// A copy of the running binary, the new side of the comparison: `target/<profile>/harness` may be rebuilt

@@ -16,6 +16,8 @@ mod render;
 mod rows;
 mod run;
 mod slurm;
+/// The hash of the sources a binary is built from (shared with `build.rs`).
+mod source_tree;
 
 use std::path::Path;
 use std::process::ExitCode;

@@ -368,8 +368,9 @@ fn ab_digest(path: &Path) -> (u64, u64) {
 #[test]
 fn ab_against_head_reports_ratios_near_one() {
     let (_, flat, _, front_to_back) = names();
-    // Builds HEAD's workspace crates in a worktree under target/ab/ into this build's target folder (its
-    // dependencies are this build's: a minute or two), unless an earlier run cached HEAD's binary there; then
+    // Takes HEAD's binary from the cache under target/ab/, or this binary when the working tree's sources are
+    // HEAD's (a clean checkout: this binary is HEAD's build), or else builds HEAD's workspace crates in a worktree
+    // under target/ab/ into this build's target folder (its dependencies are this build's: a minute or more); then
     // times a tiny config with both builds, interleaved. The working tree's code is HEAD's or a small change of
     // it: no regression, the same answers.
     let dir = temp("ab");
@@ -378,9 +379,21 @@ fn ab_against_head_reports_ratios_near_one() {
     std::fs::write(&cfg, format!("name = \"ab\"\nrepetitions = 6\nwarmups = 1\n{sweep}")).unwrap();
     let binary = Path::new(env!("CARGO_BIN_EXE_harness"));
     let before = ab_digest(binary);
+    let sources = ["Cargo.toml", "Cargo.lock", "tracer", "schema", "report", "harness"];
+    let status = std::process::Command::new("git")
+        .args(["status", "--porcelain", "--untracked-files=all", "--ignored", "--"])
+        .args(sources)
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap())
+        .output()
+        .unwrap();
+    let clean = status.status.success() && status.stdout.is_empty();
     let o = harness().args(["ab", "--base", "HEAD", cfg.to_str().unwrap()]).output().unwrap();
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{out}\n{}", stderr(&o));
+    if clean {
+        // This binary was built from HEAD's sources: it is HEAD's build, taken without compiling anything.
+        assert!(!stderr(&o).contains("ab: building"), "{}", stderr(&o));
+    }
     assert_eq!(ab_digest(binary), before, "the base build's binary does not stay in place of this one");
     assert!(out.contains("| default | random-spheres objects 3000 serial |"), "{out}");
     assert!(out.contains("| same |"), "both builds answer alike: {out}");
