@@ -21,9 +21,9 @@ const SIZES: [usize; 3] = [1_000, 10_000, 100_000];
 fn tree_params() -> Vec<AccelParams> {
     let mut all = Vec::new();
     for split in Split::ALL {
-        all.push(AccelParams { kind: AccelKind::Bvh, bvh: BvhParams { split, ..BvhParams::default() } });
+        all.push(AccelParams { kind: AccelKind::Bvh, bvh: BvhParams { split, ..BvhParams::default() }, ..AccelParams::default() });
         for traversal in Traversal::ALL {
-            all.push(AccelParams { kind: AccelKind::FlatBvh, bvh: BvhParams { split, traversal, ..BvhParams::default() } });
+            all.push(AccelParams { kind: AccelKind::FlatBvh, bvh: BvhParams { split, traversal, ..BvhParams::default() }, ..AccelParams::default() });
         }
     }
     all
@@ -67,7 +67,7 @@ fn build_threads(c: &mut Criterion) {
         let scene = SceneKind::RandomSpheres.generate(n, 1);
         group.throughput(Throughput::Elements(n as u64));
         for split in [Split::CentroidMidpoint, Split::BinnedSah] {
-            let p = AccelParams { kind: AccelKind::FlatBvh, bvh: BvhParams { split, ..BvhParams::default() } };
+            let p = AccelParams { kind: AccelKind::FlatBvh, bvh: BvhParams { split, ..BvhParams::default() }, ..AccelParams::default() };
             for (threads, pool) in &pools {
                 let id = BenchmarkId::new(format!("flat-bvh/{}/threads={threads}", split.name()), n);
                 group.bench_function(id, |b| {
