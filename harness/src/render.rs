@@ -60,6 +60,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
             traversal: args.traversal,
             ..BvhParams::default()
         },
+        ..AccelParams::default()
     };
     let threads = args.threads.map_or_else(available_threads, |t| t as usize);
     let strategy = Strategy::new(args.strategy, threads);

@@ -217,7 +217,7 @@ impl Settings {
                 intersection: self.sah_intersection_cost.unwrap_or(default.sah_costs.intersection),
             },
         };
-        AccelParams { kind, bvh }
+        AccelParams { kind, bvh, ..AccelParams::default() }
     }
 
     /// The strategy and its thread count (`threads = "all"` must have been resolved).
