@@ -11,6 +11,8 @@ use crate::geometry::Aabb;
 pub struct ChildRef(pub u32);
 
 impl ChildRef {
+    /// The root node (index 0).
+    pub const ROOT: ChildRef = ChildRef(0);
     /// No child (padding lanes of a node with fewer than `W` children).
     pub const EMPTY: ChildRef = ChildRef(u32::MAX);
     const LEAF: u32 = 1 << 31;

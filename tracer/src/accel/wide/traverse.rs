@@ -144,7 +144,7 @@ pub unsafe fn closest<K: Ops, O: Order, C: Counters, const W: usize, const B: us
     let mut t_max = ray.t_max;
     let mut best = PAD;
     let mut stack = Stack::new();
-    let mut at = Some(ChildRef::node(0));
+    let mut at = Some(ChildRef::ROOT);
     while let Some(child) = at {
         if child.is_node() {
             // SAFETY: forwarded from the caller.
@@ -183,7 +183,7 @@ pub unsafe fn any<K: Ops, O: Order, C: Counters, const W: usize, const B: usize>
 ) -> bool {
     let r = RayLanes::new(ray);
     let mut stack = Stack::new();
-    let mut at = Some(ChildRef::node(0));
+    let mut at = Some(ChildRef::ROOT);
     while let Some(child) = at {
         if child.is_node() {
             // SAFETY: forwarded from the caller.
