@@ -31,6 +31,8 @@ pub struct AbRequest<'a> {
     pub min_effect: f64,
     /// Report timings even where the two builds' answers differ (the table still says so).
     pub allow_different_answers: bool,
+    /// Fail on a flagged configuration without measuring it again.
+    pub no_confirm: bool,
 }
 
 fn git(root: &Path, args: &[&str]) -> Result<String, Error> {
@@ -464,8 +466,51 @@ struct Pair {
     new_answers: Vec<u64>,
 }
 
+/// The verdict that counts: a regression of the first measurement stands only if the second one (when taken)
+/// finds it too; otherwise the configuration is unchanged.
+fn confirmed(first: Speed, second: Option<Speed>) -> Speed {
+    match (first, second) {
+        (Speed::Regressed, Some(Speed::Regressed)) | (Speed::Regressed, None) => Speed::Regressed,
+        (Speed::Regressed, Some(_)) => Speed::Unchanged,
+        (first, _) => first,
+    }
+}
+
+/// Times `configurations` with both builds, interleaved (old then new, new then old, round after round), each run
+/// in a fresh `harness worker` process: one [`Pair`] per configuration.
+fn measure(
+    plan: &Plan,
+    configurations: &[&Configuration],
+    rounds: (u32, u32),
+    bins: (&Path, &Path),
+    root: &Path,
+    what: &str,
+) -> Result<Vec<Pair>, Error> {
+    let (warmups, repetitions) = rounds;
+    let (old_bin, new_bin) = bins;
+    let mut pairs: Vec<Pair> = configurations.iter().map(|_| Pair::default()).collect();
+    for round in 0..warmups + repetitions {
+        for (c, pair) in configurations.iter().zip(&mut pairs) {
+            let old_first = round % 2 == 0;
+            let (first, second) = if old_first { (old_bin, new_bin) } else { (new_bin, old_bin) };
+            let job = run::worker_request(plan, c);
+            let a = worker::time(first, Some(root), &job)?;
+            let b = worker::time(second, Some(root), &job)?;
+            let (old, new) = if old_first { (a, b) } else { (b, a) };
+            pair.old_answers.push(old.output_hash);
+            pair.new_answers.push(new.output_hash);
+            if round >= warmups {
+                pair.old.push(old.trace_s);
+                pair.new.push(new.trace_s);
+            }
+        }
+        eprintln!("ab: {what} round {}/{} done", round + 1, warmups + repetitions);
+    }
+    Ok(pairs)
+}
+
 /// Runs the comparison; fails (exit 1) on answers that differ or change, or on a significant single-thread
-/// regression beyond `min_effect`.
+/// regression beyond `min_effect` that a second measurement of the configuration (fresh, interleaved) confirms.
 pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
     let exp = Experiment::load(request.config)?;
     let exp = if request.quick { exp.quick() } else { exp };
@@ -475,49 +520,62 @@ pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
     let build = Build::running()?;
     let new_copy = copy_running(&build)?;
     let (old_bin, new_bin) = (base_binary(&root, &build, &rev)?, new_copy.0.clone());
-    let mut pairs: Vec<Pair> = plan.configurations.iter().map(|_| Pair::default()).collect();
-    let rounds = exp.warmups + exp.repetitions;
-    for round in 0..rounds {
-        for (c, pair) in plan.configurations.iter().zip(&mut pairs) {
-            let old_first = round % 2 == 0;
-            let (first, second) = if old_first { (&old_bin, &new_bin) } else { (&new_bin, &old_bin) };
-            let job = run::worker_request(&plan, c);
-            let a = worker::time(first, Some(&root), &job)?;
-            let b = worker::time(second, Some(&root), &job)?;
-            let (old, new) = if old_first { (a, b) } else { (b, a) };
-            pair.old_answers.push(old.output_hash);
-            pair.new_answers.push(new.output_hash);
-            if round >= exp.warmups {
-                pair.old.push(old.trace_s);
-                pair.new.push(new.trace_s);
-            }
+    let bins = (old_bin.as_path(), new_bin.as_path());
+    let rounds = (exp.warmups, exp.repetitions);
+    let all: Vec<&Configuration> = plan.configurations.iter().collect();
+    let mut pairs = measure(&plan, &all, rounds, bins, &root, "")?;
+    let speed = |c: &Configuration, pair: &Pair| {
+        let e: Estimate = ratio_ci(&pair.new, &pair.old, seed_for(&c.id));
+        (Speed::of(&e, request.min_effect, c.settings.strategy().threads == 1), e)
+    };
+    let flagged: Vec<usize> = (0..all.len())
+        .filter(|&i| !request.no_confirm && speed(all[i], &pairs[i]).0 == Speed::Regressed)
+        .collect();
+    let mut again: Vec<Option<Pair>> = all.iter().map(|_| None).collect();
+    if !flagged.is_empty() {
+        eprintln!("ab: {} configuration(s) flagged as slower: measuring them again", flagged.len());
+        let configurations: Vec<&Configuration> = flagged.iter().map(|&i| all[i]).collect();
+        let second = measure(&plan, &configurations, rounds, bins, &root, "confirmation")?;
+        for (&i, pair) in flagged.iter().zip(second) {
+            pairs[i].old_answers.extend(&pair.old_answers);
+            pairs[i].new_answers.extend(&pair.new_answers);
+            again[i] = Some(pair);
         }
-        eprintln!("ab: round {}/{rounds} done", round + 1);
     }
     println!("## A/B: {} (new, this build) against {} (old, {})\n", exp.name, &rev[..12], request.base);
     println!(
-        "Trace time per configuration, new / old (below 1: faster), 95% bootstrap interval; {} rounds, interleaved.\n",
+        "Trace time per configuration, new / old (below 1: faster), 95% bootstrap interval; {} rounds, interleaved. \
+         A single-thread configuration flagged as slower is measured again the same way and fails only if that \
+         agrees.\n",
         exp.repetitions
     );
-    println!("| series | settings | old median (s) | new median (s) | new / old [95% CI] | verdict | output |");
-    println!("|---|---|---|---|---|---|---|");
+    println!(
+        "| series | settings | old median (s) | new median (s) | new / old [95% CI] | verdict | measured again: new / old \
+         [95% CI], verdict | output |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
     let mut results = vec![];
-    for (c, pair) in plan.configurations.iter().zip(&pairs) {
-        let e: Estimate = ratio_ci(&pair.new, &pair.old, seed_for(&c.id));
-        let speed = Speed::of(&e, request.min_effect, c.settings.strategy().threads == 1);
-        let answers = Answers::of(&pair.old_answers, &pair.new_answers);
+    for (i, c) in all.iter().enumerate() {
+        let (first, e) = speed(c, &pairs[i]);
+        let second = again[i].as_ref().map(|pair| speed(c, pair));
+        let verdict = confirmed(first, second.as_ref().map(|(s, _)| *s));
+        let confirmation = second.map_or("—".to_string(), |(s, e2)| {
+            format!("{:.3} [{:.3}, {:.3}], {}", e2.value, e2.lo, e2.hi, s.label())
+        });
+        let answers = Answers::of(&pairs[i].old_answers, &pairs[i].new_answers);
         println!(
-            "| {} | {:.6} | {:.6} | {:.3} [{:.3}, {:.3}] | {} | {} |",
+            "| {} | {:.6} | {:.6} | {:.3} [{:.3}, {:.3}] | {} | {} | {} |",
             describe(c),
-            report::stats::median(&pair.old),
-            report::stats::median(&pair.new),
+            report::stats::median(&pairs[i].old),
+            report::stats::median(&pairs[i].new),
             e.value,
             e.lo,
             e.hi,
-            speed.label(),
+            first.label(),
+            confirmation,
             answers.label()
         );
-        results.push((describe(c).replace(" | ", ": "), speed, answers));
+        results.push((describe(c).replace(" | ", ": "), verdict, answers));
     }
     match failure(&results, request.allow_different_answers) {
         Some(why) => Err(Error::Run(why)),
@@ -567,6 +625,19 @@ mod tests {
         assert_eq!(Speed::of(&e(1.05, 1.02, 1.08), 0.1, true), Speed::Unchanged, "within the minimum effect");
         assert_eq!(Speed::of(&e(1.2, 0.95, 1.4), 0.1, true), Speed::Unchanged, "not significant");
         assert_eq!(Speed::of(&e(0.8, 0.75, 0.85), 0.1, true), Speed::Improved);
+    }
+
+    #[test]
+    fn a_regression_fails_only_when_the_second_measurement_agrees() {
+        assert_eq!(confirmed(Speed::Regressed, Some(Speed::Regressed)), Speed::Regressed);
+        assert_eq!(confirmed(Speed::Regressed, Some(Speed::Unchanged)), Speed::Unchanged);
+        assert_eq!(confirmed(Speed::Regressed, Some(Speed::Improved)), Speed::Unchanged);
+        assert_eq!(confirmed(Speed::Regressed, None), Speed::Regressed, "--no-confirm");
+        assert_eq!(confirmed(Speed::Improved, None), Speed::Improved);
+        let failing = |second| {
+            failure(&[("a".into(), confirmed(Speed::Regressed, second), Answers::Same)], false).is_some()
+        };
+        assert!(failing(Some(Speed::Regressed)) && !failing(Some(Speed::Unchanged)));
     }
 
     #[test]

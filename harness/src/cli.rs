@@ -161,6 +161,9 @@ pub struct AbArgs {
     /// `differs`). Answers that change between runs of one build always fail.
     #[arg(long)]
     pub allow_different_answers: bool,
+    /// Fail on a configuration flagged as slower without measuring it again.
+    #[arg(long)]
+    pub no_confirm: bool,
 }
 
 #[derive(Subcommand, Debug)]

@@ -53,6 +53,7 @@ fn main() -> ExitCode {
             quick: args.quick,
             min_effect: args.min_effect,
             allow_different_answers: args.allow_different_answers,
+            no_confirm: args.no_confirm,
         }),
         Command::Baseline(BaselineCommand::Save { run_dir, name, force }) => baseline::save(&run_dir, &name, force).map(|dest| {
             println!("baseline saved: {}", dest.display());

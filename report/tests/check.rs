@@ -23,6 +23,8 @@ const REPETITIONS: u32 = 10;
 const NOISE: f64 = 0.05;
 /// The machine of the generated rows unless a test names another.
 const MACHINE: &str = "3f2a00c0ffee";
+/// The boot of the generated rows unless a test names another.
+const BOOT: &str = "4e5d2b08-d3c9-47de-8a4c-2142f521c75b";
 
 /// What differs between generated runs.
 struct Gen<'a> {
@@ -41,6 +43,8 @@ struct Gen<'a> {
     build_slowdown: Option<(&'a str, f64)>,
     /// `load_avg_1m` of every row (2 logical cores).
     load: f64,
+    /// `boot_id` of every row.
+    boot: &'a str,
 }
 
 impl Default for Gen<'_> {
@@ -54,6 +58,7 @@ impl Default for Gen<'_> {
             machine: MACHINE,
             build_slowdown: None,
             load: 0.5,
+            boot: BOOT,
         }
     }
 }
@@ -136,6 +141,7 @@ fn runs_csv(g: &Gen) -> String {
                         validation: "exact".into(),
                         validated_against: AccelKind::List.name().into(),
                         machine_id: g.machine.into(),
+                        boot_id: g.boot.into(),
                         ..Row::of(&settings(accel, objects, seed))
                     };
                     out.push_str(&schema::row::csv_line(&row).unwrap());
@@ -243,7 +249,7 @@ fn injected_slowdown_is_flagged() {
     let new = Gen { noise_seed: 12, slowdown: Some(("tree", 1.3)), ..Gen::default() };
     let outcome = compare("slow", &new, &old, &CheckOptions::default()).unwrap();
     println!("{}", outcome.markdown());
-    assert_eq!(outcome.mode, TimingMode::SameMachine { machine_id: MACHINE.into() });
+    assert_eq!(outcome.mode, TimingMode::SameMachine { machine_id: MACHINE.into(), boot_id: BOOT.into() });
     assert!(outcome.failed());
     assert!(outcome.counter_changes.is_empty() && outcome.missing.is_empty(), "{outcome:?}");
     assert_eq!(outcome.common, 12);
@@ -297,7 +303,7 @@ fn a_slower_reference_series_fails_on_one_machine_and_informs_across_two() {
     assert!(same.times.iter().filter(|t| t.series != "brute").all(|t| !t.fails()));
     // The speedups over the slower reference rose: the old gate called this an improvement.
     assert!(same.speedups.iter().all(|s| s.verdict == SpeedupVerdict::Improved), "{:?}", same.speedups);
-    assert!(md.contains("timing mode: same machine (machine_id 3f2a00c0ffee)"), "{md}");
+    assert!(md.contains("timing mode: same machine (machine_id 3f2a00c0ffee, boot 4e5d2b08)"), "{md}");
     assert!(md.contains("4 time regression(s) not measured again: brute random-spheres objects"), "{md}");
 
     // The same rows from another machine: compared, never gating.
@@ -319,6 +325,27 @@ fn a_slower_reference_series_fails_on_one_machine_and_informs_across_two() {
     let none = compare("slow-reference-unknown", &unknown, &old_unknown, &CheckOptions::default()).unwrap();
     assert!(!none.failed() && !none.mode.gates_times(), "{:?}", none.mode);
     assert!(none.mode.line().contains("an unrecorded machine"), "{}", none.mode.line());
+    // The same hardware facts in another boot (another VM of the same kind reads the same): for information.
+    let rebooted = Gen {
+        boot: "9c1f0e77-0000-4000-8000-000000000000",
+        ..Gen { noise_seed: 52, slowdown: Some(("brute", 1.2)), ..Gen::default() }
+    };
+    let boot = compare("slow-reference-rebooted", &rebooted, &old, &CheckOptions::default()).unwrap();
+    assert!(!boot.failed() && !boot.mode.gates_times(), "{}", boot.markdown());
+    assert_eq!(
+        boot.mode.line(),
+        "timing mode: information only: same hardware facts (machine_id 3f2a00c0ffee) but the run is from boot \
+         9c1f0e77, the baseline from boot 4e5d2b08: virtual machines of one kind share every fact machine_id hashes, \
+         so times gate only within one boot; gating instruction counts and work counters"
+    );
+    // A baseline recorded before boot_id (the committed CI baseline): for information.
+    let old_unbooted = Gen { boot: "", ..Gen { noise_seed: 51, ..Gen::default() } };
+    let unbooted = compare("slow-reference-unbooted", &new, &old_unbooted, &CheckOptions::default()).unwrap();
+    assert!(
+        !unbooted.failed() && unbooted.mode.line().contains("the baseline from no recorded boot"),
+        "{}",
+        unbooted.mode.line()
+    );
     // A run measured at a load more than 1 above the baseline's (2.0 against 0.5) is compared for information;
     // at 1.5 it still gates.
     let busier = Gen { load: 1.5, ..Gen { noise_seed: 52, slowdown: Some(("brute", 1.2)), ..Gen::default() } };

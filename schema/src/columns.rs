@@ -154,6 +154,9 @@ declare_columns! {
         /// 12 hex digits identifying the machine: a hash of every column from `cpu_model` to here, cores and rustc.
         /// Rows of different machines are never pooled into one point (empty: recorded before this column).
         machine_id: String, Provenance, added 2;
+        /// The kernel's random id of the boot the run happened in (`/proc/sys/kernel/random/boot_id`, empty elsewhere):
+        /// virtual machines of one kind share every fact in `machine_id`, so absolute times gate only within one boot.
+        boot_id: String, Provenance, added 2;
     }
 }
 

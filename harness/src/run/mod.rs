@@ -20,10 +20,10 @@ use crate::error::Error;
 use crate::output::Progress;
 use crate::plan::{Configuration, Plan};
 use crate::rows::RowLog;
+use backend::Setup;
 use measure::Timing;
 use provenance::{Provenance, load_average_1m, timestamp_now};
 use validate::RayBank;
-use backend::Setup;
 use worker::{Worker, WorkerRequest};
 
 /// File names inside a run folder.
@@ -175,6 +175,7 @@ fn row(
     row.kernel = m.kernel.clone();
     row.target_features = m.target_features.clone();
     row.machine_id = m.machine_id.clone();
+    row.boot_id = m.boot_id.clone();
     row.rounded()
 }
 
@@ -310,7 +311,8 @@ mod tests {
         assert_eq!((row.grazing, row.reference_checked, row.wrong_side.as_str()), (2, 16_384, "backend"));
         let text = format!("{}\n{}", schema::row::header(), schema::row::csv_line(&row).unwrap());
         let back = &schema::row::read_rows(&text).unwrap()[0];
-        let metrics = [back.setup_s, back.scene_s, back.build_s, back.trace_s, back.encode_s, back.total_s, back.mrays_per_s];
+        let metrics =
+            [back.setup_s, back.scene_s, back.build_s, back.trace_s, back.encode_s, back.total_s, back.mrays_per_s];
         assert!(metrics.iter().all(Option::is_none), "{metrics:?} in {text}");
     }
 }

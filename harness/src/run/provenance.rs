@@ -39,6 +39,8 @@ pub struct Machine {
     pub kernel: String,
     pub target_features: String,
     pub machine_id: String,
+    /// This boot's random id (not part of `machine_id`).
+    pub boot_id: String,
 }
 
 impl Machine {
@@ -59,7 +61,17 @@ impl Machine {
         }
         let kernel = std::fs::read_to_string("/proc/sys/kernel/osrelease").unwrap_or_default().trim().to_string();
         let compiled: Vec<&str> = ISA.iter().filter(|(_, feature)| compiled_with(feature)).map(|(_, f)| *f).collect();
-        Machine::from_facts(&cpuinfo, &caches.join(" "), &kernel, &compiled.join(" "), cpu_model, logical_cores, rustc)
+        let mut m = Machine::from_facts(
+            &cpuinfo,
+            &caches.join(" "),
+            &kernel,
+            &compiled.join(" "),
+            cpu_model,
+            logical_cores,
+            rustc,
+        );
+        m.boot_id = std::fs::read_to_string("/proc/sys/kernel/random/boot_id").unwrap_or_default().trim().to_string();
+        m
     }
 
     /// The machine of these facts (`cpuinfo`: the text of `/proc/cpuinfo`); `machine_id` hashes them all.
@@ -92,6 +104,7 @@ impl Machine {
             kernel: kernel.to_string(),
             target_features: target_features.to_string(),
             machine_id: String::new(),
+            boot_id: String::new(),
         };
         let mut h = tracer::fingerprint::Fnv64::default();
         for part in [

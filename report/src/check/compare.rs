@@ -109,13 +109,16 @@ fn counted_elsewhere(run_dir: &Path, rows: &Rows) -> Result<Option<String>, Erro
 }
 
 /// Same machine when every row of both files (failed ones included) has one and the same non-empty
-/// `machine_id`, and the run's median `load_avg_1m` exceeds the baseline's by at most `max_extra_load`; else, or
-/// when `forced`, information only, saying why.
+/// `machine_id` and one and the same non-empty `boot_id`, and the run's median `load_avg_1m` exceeds the baseline's
+/// by at most `max_extra_load`; else, or when `forced`, information only, saying why.
+///
+/// The boot is part of it because virtual machines of one kind share every fact `machine_id` hashes: a CI run on
+/// another VM with this machine's `machine_id` built trees 1.3-1.8x slower than its baseline at equal trace times.
 fn timing_mode(new: &Rows, old: &Rows, forced: bool, max_extra_load: f64) -> TimingMode {
-    let ids = |rows: &Rows| -> BTreeSet<String> {
-        rows.runs.iter().chain(&rows.failed).map(|r| r.row.machine_id.clone()).collect()
+    let ids = |rows: &Rows, column: fn(&schema::Row) -> &String| -> BTreeSet<String> {
+        rows.runs.iter().chain(&rows.failed).map(|r| column(&r.row).clone()).collect()
     };
-    let (n, o) = (ids(new), ids(old));
+    let (n, o) = (ids(new, |r| &r.machine_id), ids(old, |r| &r.machine_id));
     let name = |ids: &BTreeSet<String>| -> String {
         let named: Vec<String> =
             ids.iter().map(|id| if id.is_empty() { "an unrecorded machine".to_string() } else { id.clone() }).collect();
@@ -131,6 +134,28 @@ fn timing_mode(new: &Rows, old: &Rows, forced: bool, max_extra_load: f64) -> Tim
         (Some(id), 1, 1) if !id.is_empty() && n == o => id.clone(),
         _ => return TimingMode::Information { reason: format!("run on {}, baseline on {}", name(&n), name(&o)) },
     };
+    let (nb, ob) = (ids(new, |r| &r.boot_id), ids(old, |r| &r.boot_id));
+    let boot = |ids: &BTreeSet<String>| -> String {
+        match (ids.len(), ids.iter().next()) {
+            (1, Some(id)) if id.is_empty() => "no recorded boot".to_string(),
+            (1, Some(id)) => format!("boot {}", short_boot(id)),
+            _ => format!("{} boots", ids.len()),
+        }
+    };
+    let boot_id = match (nb.iter().next(), nb.len(), ob.len()) {
+        (Some(id), 1, 1) if !id.is_empty() && nb == ob => id.clone(),
+        _ => {
+            return TimingMode::Information {
+                reason: format!(
+                    "same hardware facts (machine_id {machine_id}) but the run is from {}, the baseline from {}: \
+                     virtual machines of one kind share every fact machine_id hashes, so times gate only within one \
+                     boot",
+                    boot(&nb),
+                    boot(&ob)
+                ),
+            };
+        }
+    };
     let load = |rows: &Rows| {
         stats::median(&rows.runs.iter().map(|r| r.row.load_avg_1m).filter(|l| l.is_finite()).collect::<Vec<_>>())
     };
@@ -143,7 +168,12 @@ fn timing_mode(new: &Rows, old: &Rows, forced: bool, max_extra_load: f64) -> Tim
             ),
         };
     }
-    TimingMode::SameMachine { machine_id }
+    TimingMode::SameMachine { machine_id, boot_id }
+}
+
+/// The first 8 characters of a boot id.
+pub(crate) fn short_boot(id: &str) -> &str {
+    &id[..id.len().min(8)]
 }
 
 /// Runs by configuration id.

@@ -91,10 +91,12 @@ impl Default for CheckOptions {
 /// Which wall times gate, and why: the check's first output line ([`TimingMode::line`]).
 #[derive(Clone, Debug, PartialEq)]
 pub enum TimingMode {
-    /// Every row of run and baseline has this `machine_id`: absolute times gate.
+    /// Every row of run and baseline has this `machine_id` and `boot_id`: absolute times gate.
     SameMachine {
         /// The one machine.
         machine_id: String,
+        /// The one boot of it.
+        boot_id: String,
     },
     /// Timings are compared for information only, because of `reason` (another machine, rows without a
     /// machine, or `--timings-for-information`).
@@ -113,9 +115,10 @@ impl TimingMode {
     /// One line: the mode and why.
     pub fn line(&self) -> String {
         match self {
-            TimingMode::SameMachine { machine_id } => format!(
-                "timing mode: same machine (machine_id {machine_id}): trace_s and build_s of every configuration \
-                 gated, besides instruction counts and work counters"
+            TimingMode::SameMachine { machine_id, boot_id } => format!(
+                "timing mode: same machine (machine_id {machine_id}, boot {}): trace_s and build_s of every \
+                 configuration gated, besides instruction counts and work counters",
+                compare::short_boot(boot_id)
             ),
             TimingMode::Information { reason } => {
                 format!("timing mode: information only: {reason}; gating instruction counts and work counters")

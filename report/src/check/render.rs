@@ -98,13 +98,15 @@ impl CheckOutcome {
     /// gating; fails), speedups (value, lower, upper of old, new and ratio; verdict), counter_changes, missing.
     /// Non-finite numbers are written as `null`.
     pub fn to_json(&self) -> String {
-        let (mode, machine_id, reason) = match &self.mode {
-            TimingMode::SameMachine { machine_id } => ("same-machine", Some(machine_id.as_str()), None),
-            TimingMode::Information { reason } => ("information", None, Some(reason.as_str())),
+        let (mode, machine_id, boot_id, reason) = match &self.mode {
+            TimingMode::SameMachine { machine_id, boot_id } => {
+                ("same-machine", Some(machine_id.as_str()), Some(boot_id.as_str()), None)
+            }
+            TimingMode::Information { reason } => ("information", None, None, Some(reason.as_str())),
         };
         let document = JsonOutcome {
             failed: self.failed(),
-            timing_mode: JsonMode { mode, machine_id, reason, line: self.mode.line() },
+            timing_mode: JsonMode { mode, machine_id, boot_id, reason, line: self.mode.line() },
             common_configurations: self.common,
             instructions: JsonInstructions {
                 gating: self.instructions.gating,
@@ -296,6 +298,8 @@ struct JsonMode<'a> {
     #[serde(skip_serializing_if = "Option::is_none")]
     machine_id: Option<&'a str>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    boot_id: Option<&'a str>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     reason: Option<&'a str>,
     line: String,
 }
@@ -402,7 +406,7 @@ mod tests {
     fn json_keeps_its_keys_and_writes_non_finite_numbers_as_null() {
         let e = |value, lo, hi| Estimate { value, lo, hi };
         let outcome = CheckOutcome {
-            mode: TimingMode::SameMachine { machine_id: "3f2a00000000".into() },
+            mode: TimingMode::SameMachine { machine_id: "3f2a00000000".into(), boot_id: "0b007".into() },
             counter_changes: vec![CounterChange {
                 config_id: "00ff".into(),
                 series: "a \"quoted\"\tseries\n".into(),
@@ -454,6 +458,7 @@ mod tests {
             "timing_mode": {
                 "mode": "same-machine",
                 "machine_id": "3f2a00000000",
+                "boot_id": "0b007",
                 "line": outcome.mode.line()
             },
             "common_configurations": 3,
