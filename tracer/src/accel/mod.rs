@@ -67,9 +67,8 @@ pub enum AccelKind {
 }
 
 impl AccelKind {
-    /// Every kind the harness lists, in the order it lists them. [`AccelKind::WideBvh`] is not among them yet: the
-    /// harness's schema must list it too (its own `Accel::ALL`) when it is integrated.
-    pub const ALL: [AccelKind; 3] = [AccelKind::List, AccelKind::Bvh, AccelKind::FlatBvh];
+    /// Every kind the harness lists, in the order it lists them.
+    pub const ALL: [AccelKind; 4] = [AccelKind::List, AccelKind::Bvh, AccelKind::FlatBvh, AccelKind::WideBvh];
 
     /// The kebab-case name used in configs and on the command line.
     pub fn name(self) -> &'static str {
