@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand};
 use schema::{Named, SceneName};
-use tracer::accel::{AccelKind, BvhParams, Split, Traversal};
+use tracer::accel::wide::{ChildOrdering, Kernel};
+use tracer::accel::{AccelKind, BvhParams, Split, Traversal, WideParams};
 use tracer::executor::StrategyKind;
 use tracer::scene::SceneKind;
 
@@ -334,6 +335,18 @@ fn choice<T: Named>(aliases: &'static [(&'static str, T)]) -> impl TypedValuePar
     })
 }
 
+/// An integer among `values` (the error lists them).
+fn one_of(values: &'static [u32]) -> impl TypedValueParser<Value = u32> {
+    clap::value_parser!(u32).try_map(move |n| {
+        if values.contains(&n) {
+            Ok(n)
+        } else {
+            let list = values.iter().map(u32::to_string).collect::<Vec<_>>().join(", ");
+            Err(format!("{n} is not allowed (allowed: {list})"))
+        }
+    })
+}
+
 #[derive(Args, Debug)]
 pub struct RenderArgs {
     /// Scene generator, or `sphere-file` to read `--file`.
@@ -363,6 +376,18 @@ pub struct RenderArgs {
     /// Child visiting order.
     #[arg(long, default_value = Traversal::Fixed.name(), value_parser = choice::<Traversal>(&[]))]
     pub traversal: Traversal,
+    /// Children per node of `--accel wide-bvh` (4 or 8).
+    #[arg(long, default_value_t = WideParams::default().width, value_parser = one_of(&WideParams::WIDTHS))]
+    pub node_width: u32,
+    /// Spheres per SIMD leaf block of `--accel wide-bvh` (4, 8 or 16).
+    #[arg(long, default_value_t = WideParams::default().leaf_block, value_parser = one_of(&WideParams::LEAF_BLOCKS))]
+    pub leaf_block: u32,
+    /// SIMD kernel of `--accel wide-bvh` (`auto`: the best this CPU has).
+    #[arg(long, default_value = Kernel::Auto.name(), value_parser = choice::<Kernel>(&[]))]
+    pub simd_kernel: Kernel,
+    /// Child visiting order of `--accel wide-bvh`.
+    #[arg(long, default_value = WideParams::default().order.name(), value_parser = choice::<ChildOrdering>(&[]))]
+    pub child_order: ChildOrdering,
     /// Parallel strategy.
     #[arg(long, default_value = StrategyKind::RayonBands.name(), value_parser = choice::<StrategyKind>(&[]))]
     pub strategy: StrategyKind,

@@ -1,7 +1,8 @@
 //! `harness list`: every name a config or the command line accepts.
 
 use schema::{Accel, Axis, Named, ObvhsQuality, PeerKind, SceneName, Workload};
-use tracer::accel::{Split, Traversal};
+use tracer::accel::wide::{ChildOrdering, Kernel};
+use tracer::accel::{Split, Traversal, WideParams};
 use tracer::executor::StrategyKind;
 
 fn line<T: Named>(what: &str, names: &[T]) {
@@ -32,5 +33,18 @@ pub fn run() {
     line("splits", &Split::ALL);
     line("traversals", &Traversal::ALL);
     line("strategies", &StrategyKind::ALL);
+    let ints = |v: &[u32]| v.iter().map(u32::to_string).collect::<Vec<_>>().join(", ");
+    println!("{:<12} {} (wide-bvh {})", "node widths", ints(&WideParams::WIDTHS), Axis::node_width.key());
+    println!("{:<12} {} (wide-bvh {})", "leaf blocks", ints(&WideParams::LEAF_BLOCKS), Axis::leaf_block.key());
+    let here: Vec<&str> = Kernel::available().into_iter().map(Kernel::name).collect();
+    println!(
+        "{:<12} {} (wide-bvh {}; this CPU runs: auto = {}, {})",
+        "kernels",
+        Kernel::ALL.map(Kernel::name).join(", "),
+        Axis::simd_kernel.key(),
+        Kernel::Auto.resolve().name(),
+        here.join(", ")
+    );
+    line("orders", &ChildOrdering::ALL);
     println!("{:<12} {} logical cores on this machine", "threads", crate::render::available_threads());
 }

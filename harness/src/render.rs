@@ -3,7 +3,8 @@
 use std::io::BufWriter;
 use std::time::Instant;
 
-use tracer::accel::{AccelParams, AccelVisitor, Accelerator, BuiltAccel, BvhParams};
+use tracer::accel::{AccelParams, AccelVisitor, Accelerator, BuiltAccel, BvhParams, WideParams};
+use tracer::accel::wide::Kernel;
 use tracer::counters::{Counters, NoCounters, WorkCounters};
 use tracer::executor::Strategy;
 use tracer::render::{Image, RenderSettings, render};
@@ -48,6 +49,11 @@ impl<C: Counters> AccelVisitor for Render<'_, C> {
 
 /// Runs the command.
 pub fn run(args: &RenderArgs) -> Result<(), Error> {
+    if !args.simd_kernel.is_available() {
+        let allowed: Vec<&str> = std::iter::once(Kernel::Auto).chain(Kernel::available()).map(Kernel::name).collect();
+        let kernel = args.simd_kernel.name();
+        return Err(Error::Input(format!("--simd-kernel {kernel}: not available on this CPU (allowed here: {})", allowed.join(", "))));
+    }
     let t0 = Instant::now();
     let scene = scene(args)?;
     let scene_s = t0.elapsed().as_secs_f64();
@@ -60,6 +66,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
             traversal: args.traversal,
             ..BvhParams::default()
         },
+        wide: WideParams { width: args.node_width, leaf_block: args.leaf_block, kernel: args.simd_kernel, order: args.child_order },
     };
     let threads = args.threads.map_or_else(available_threads, |t| t as usize);
     let strategy = Strategy::new(args.strategy, threads);
@@ -79,7 +86,10 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
 
     let stats = accel.stats();
     println!("scene        {} spheres, fingerprint {:016x}", scene.spheres.len(), scene.fingerprint());
-    println!("accel        {} {:?}", args.accel.name(), params.bvh);
+    match accel.kernel_name() {
+        Some(kernel) => println!("accel        {} {:?} {:?} (kernel {kernel})", args.accel.name(), params.bvh, params.wide),
+        None => println!("accel        {} {:?}", args.accel.name(), params.bvh),
+    }
     println!("strategy     {strategy}");
     println!("tree         {} nodes, {} leaves, depth {}, {} bytes, SAH cost {:.2}", stats.nodes, stats.leaves, stats.depth, stats.bytes, stats.sah_cost);
     println!("time         scene {:.4} s, build {:.4} s, render {:.4} s, encode {:.4} s", scene_s, build_s, render_s, encode_s);

@@ -60,7 +60,7 @@ fn bad_configs_exit_2_with_one_line_and_write_nothing() {
         (
             "unknown accelerator",
             "name = \"t\"\n[sweep]\naccel = [\"bvh\", \"bhv\"]\n",
-            "sweep.accel[1]: unknown value \"bhv\" (allowed: list, bvh, flat-bvh, obvhs-bvh2, obvhs-cwbvh, embree, embree-packets)",
+            "sweep.accel[1]: unknown value \"bhv\" (allowed: list, bvh, flat-bvh, wide-bvh, obvhs-bvh2, obvhs-cwbvh, embree, embree-packets)",
         ),
         (
             "zero threads",
@@ -71,6 +71,16 @@ fn bad_configs_exit_2_with_one_line_and_write_nothing() {
             "leaf size",
             "name = \"t\"\n[sweep]\nleaf_size = 17\n",
             "sweep.leaf_size[0]: 17 is out of range (allowed: integers 1..=16)",
+        ),
+        (
+            "wide node width",
+            "name = \"t\"\n[sweep]\naccel = \"wide-bvh\"\nnode_width = [4, 6]\n",
+            "sweep.node_width[1]: 6 is not allowed (allowed: 4, 8)",
+        ),
+        (
+            "wide kernel name",
+            "name = \"t\"\n[sweep]\naccel = \"wide-bvh\"\nsimd_kernel = \"sse\"\n",
+            "sweep.simd_kernel[0]: unknown value \"sse\" (allowed: auto, scalar, avx2, avx512)",
         ),
         ("missing sweep", "name = \"t\"\n", "missing [sweep] table"),
         (
@@ -128,6 +138,52 @@ fn bad_configs_exit_2_with_one_line_and_write_nothing() {
     assert!(stderr(&o).contains("missing.toml: cannot read"), "{}", stderr(&o));
     let o = harness().args(["run", "--shard", "3/2", "x.toml"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2), "clap errors exit 2 too");
+}
+
+/// The wide BVH through a whole run: validated exact against brute force, with the kernel that ran recorded
+/// (`scalar` when asked, `auto` as the best this CPU has); a kernel this CPU lacks is refused before anything runs.
+#[test]
+fn wide_bvh_runs_validated_and_records_its_kernel() {
+    use tracer::accel::wide::Kernel;
+    let dir = temp("wide");
+    let cfg = dir.join("wide.toml");
+    let text = "name = \"w\"\nrepetitions = 1\nwarmups = 0\n[sweep]\nobjects = 300\nwidth = 40\nheight = 30\n\
+                strategy = \"serial\"\nworkload = [\"primary\", \"shadow\"]\naccel = \"wide-bvh\"\nnode_width = [4, 8]\n\
+                simd_kernel = [\"scalar\", \"auto\"]\nchild_order = \"octant\"\nleaf_block = 4\n";
+    std::fs::write(&cfg, text).unwrap();
+    let out = dir.join("out");
+    let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows = schema::row::read_rows(&std::fs::read_to_string(out.join("runs.csv")).unwrap()).unwrap();
+    assert_eq!(rows.len(), 2 * 2 * 2, "2 workloads x 2 widths x 2 kernels");
+    for r in &rows {
+        assert_eq!((r.validation.as_str(), r.validated_against.as_str()), ("exact", "list"), "{r:?}");
+        let want = if r.simd_kernel == Some(Kernel::Scalar) { Kernel::Scalar } else { Kernel::Auto.resolve() };
+        assert_eq!(r.simd_kernel_used, want.name(), "{:?}", r.simd_kernel);
+        assert_eq!(r.child_order.map(|o| o.name()), Some("octant"));
+    }
+    // Every kernel answers alike: the same answer hash and counters for both kernels of one width and workload.
+    for a in &rows {
+        for b in rows.iter().filter(|b| b.node_width == a.node_width && b.workload == a.workload) {
+            assert_eq!((&a.image_hash, a.nodes_per_ray, a.prim_tests_per_ray), (&b.image_hash, b.nodes_per_ray, b.prim_tests_per_ray));
+        }
+    }
+
+    if !Kernel::Avx512.is_available() {
+        let cfg = dir.join("avx512.toml");
+        std::fs::write(&cfg, text.replace("[\"scalar\", \"auto\"]", "[\"auto\", \"avx512\"]")).unwrap();
+        let out = dir.join("out512");
+        for args in [vec!["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()], vec!["validate", cfg.to_str().unwrap()]] {
+            let o = harness().args(&args).output().unwrap();
+            let err = stderr(&o);
+            assert_eq!(o.status.code(), Some(2), "{err}");
+            assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+            let allowed: Vec<&str> = std::iter::once(Kernel::Auto).chain(Kernel::available()).map(Kernel::name).collect();
+            let expected = format!("avx512.toml: simd_kernel: \"avx512\" is not available on this CPU (allowed here: {})", allowed.join(", "));
+            assert!(err.contains(&expected), "expected {expected:?} in {err}");
+            assert!(!out.exists(), "nothing written");
+        }
+    }
 }
 
 #[test]

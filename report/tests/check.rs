@@ -97,7 +97,7 @@ fn runs_csv(g: &Gen) -> String {
                 let base = match accel {
                     AccelKind::List => objects as f64 * 1e-4,
                     AccelKind::Bvh => (objects as f64).log2() * 1e-3,
-                    AccelKind::FlatBvh => (objects as f64).log2() * 0.8e-3,
+                    AccelKind::FlatBvh | AccelKind::WideBvh => (objects as f64).log2() * 0.8e-3,
                 };
                 let factor = g.slowdown.filter(|(s, _)| *s == label).map_or(1.0, |(_, f)| f);
                 let base_nodes = if tree { (objects as f64).log2() * 2.5 } else { 0.0 };

@@ -2,7 +2,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::columns::{Axis, AxisValue, Settings};
+use crate::columns::{APPLICABILITY_INPUTS, Axis, AxisValue, Settings};
 
 /// The axes `fixed` names, plus every axis that applies to no configuration with those values (whatever
 /// the other named axes take), plus those it forces to one value (threads of a serial series). Speedup
@@ -12,7 +12,9 @@ pub fn fixed_axes(fixed: &BTreeMap<Axis, Vec<AxisValue>>) -> Vec<Axis> {
         .iter()
         .map(|&a| match fixed.get(&a) {
             Some(values) => values.clone(),
-            None => a.choices().unwrap_or_else(|| vec![a.default_value()]),
+            // Only the axes the predicates read change what applies: the others keep their default.
+            None if APPLICABILITY_INPUTS.contains(&a) => a.choices().unwrap_or_else(|| vec![a.default_value()]),
+            None => vec![a.default_value()],
         })
         .collect();
     let mut out: Vec<Axis> = fixed.keys().copied().collect();
@@ -77,5 +79,34 @@ mod tests {
         }
         let serial = AxisValue::strategy(StrategyKind::Serial);
         assert!(fixed_axes(&BTreeMap::from([(Axis::strategy, vec![serial])])).contains(&Axis::threads));
+        let wide = AxisValue::accel(Accel::Ours(AccelKind::WideBvh));
+        let fixed = fixed_axes(&BTreeMap::from([(Axis::accel, vec![wide])]));
+        assert!(fixed.contains(&Axis::traversal) && !fixed.contains(&Axis::node_width) && !fixed.contains(&Axis::split));
+        let flat = AxisValue::accel(Accel::Ours(AccelKind::FlatBvh));
+        assert!(fixed_axes(&BTreeMap::from([(Axis::accel, vec![flat])])).contains(&Axis::simd_kernel));
+    }
+
+    #[test]
+    fn only_the_declared_inputs_change_what_applies() {
+        let lists: Vec<Vec<AxisValue>> = Axis::ALL
+            .iter()
+            .map(|&a| match a.choices() {
+                Some(all) if APPLICABILITY_INPUTS.contains(&a) => all,
+                _ => vec![a.default_value()],
+            })
+            .collect();
+        let others: Vec<Axis> = Axis::ALL.iter().copied().filter(|a| !APPLICABILITY_INPUTS.contains(a)).collect();
+        each_combination(&lists, |base| {
+            let applies = |s: &Settings| Axis::ALL.iter().map(|&a| s.applies(a)).collect::<Vec<_>>();
+            let want = applies(base);
+            for &axis in &others {
+                for value in axis.choices().unwrap_or_default() {
+                    let mut s = base.clone();
+                    s.set(value.clone());
+                    assert_eq!(applies(&s), want, "{axis:?} = {value} changes what applies: add it to APPLICABILITY_INPUTS");
+                }
+            }
+            true
+        });
     }
 }

@@ -2,11 +2,14 @@
 //! the measures. Adding a setting is one entry here (plus the tracer code that uses it).
 
 use tracer::accel::bvh::SahCosts;
-use tracer::accel::{AccelKind, AccelParams, BvhParams, Split, Traversal};
+use tracer::accel::wide::{ChildOrdering, Kernel};
+use tracer::accel::{AccelKind, AccelParams, BvhParams, Split, Traversal, WideParams};
 use tracer::executor::{Strategy, StrategyKind};
 use tracer::scene::SceneKind;
 
-use crate::names::{Accel, EmbreeIsa, EmbreeQuality, ObvhsQuality, PeerKind, SceneName, Threads, Workload};
+use crate::names::{
+    Accel, EmbreeIsa, EmbreeQuality, LeafBlock, NodeWidth, ObvhsQuality, PeerKind, SceneName, Threads, Workload,
+};
 
 declare_columns! {
     identity {
@@ -36,8 +39,8 @@ declare_columns! {
         /// Bins per axis of the binned SAH split.
         sah_bins: Option<u32> = Some(BvhParams::default().sah_bins),
             range(*BvhParams::SAH_BINS.start(), *BvhParams::SAH_BINS.end()), applies binned_sah else None;
-        /// Child visiting order of the tracer's trees.
-        traversal: Option<Traversal> = Some(BvhParams::default().traversal), applies tree else None;
+        /// Child visiting order of the tracer's binary trees (the wide BVH has `child_order`).
+        traversal: Option<Traversal> = Some(BvhParams::default().traversal), applies binary_tree else None;
         /// Parallel strategy.
         strategy: StrategyKind = StrategyKind::Serial;
         /// Worker threads as configured: a count, or `all` (the machine's logical cores, resolved into `threads_used`,
@@ -63,6 +66,16 @@ declare_columns! {
         /// SAH cost of a sphere test that the SAH splits build with.
         sah_intersection_cost: Option<f32> = Some(SahCosts::UNIT.intersection),
             range(*BvhParams::SAH_COSTS.start(), *BvhParams::SAH_COSTS.end()), applies sah_split else None, added 2;
+        /// Children per node of the wide BVH (4 or 8).
+        node_width: Option<NodeWidth> = Some(NodeWidth(WideParams::default().width)), applies wide else None, added 2;
+        /// Spheres per SIMD leaf block of the wide BVH (4, 8 or 16).
+        leaf_block: Option<LeafBlock> = Some(LeafBlock(WideParams::default().leaf_block)), applies wide else None,
+            added 2, unit "spheres";
+        /// SIMD kernel of the wide BVH's traversal (`auto`: the best this CPU has; the one that ran is in
+        /// `simd_kernel_used`).
+        simd_kernel: Option<Kernel> = Some(WideParams::default().kernel), applies wide else None, added 2;
+        /// Order in which the wide BVH visits a node's children: stored, nearest entry first, or by ray octant.
+        child_order: Option<ChildOrdering> = Some(WideParams::default().order), applies wide else None, added 2;
     }
     measures {
         /// Wall time of the backend's one-time start-up in the process that times the configuration: thread pool,
@@ -165,10 +178,17 @@ declare_columns! {
         node: String, Provenance, added 3;
         /// 16 hex digits: hash of the `Cargo.lock` the harness was built with (empty: recorded before this column).
         cargo_lock: String, Provenance, added 3;
+        /// The SIMD kernel that ran: `simd_kernel` with `auto` resolved on the machine (`scalar`, `avx2`, `avx512`);
+        /// `-` for structures without SIMD kernels.
+        simd_kernel_used: String, Provenance = "-".to_string(), added 2;
     }
 }
 
 // Where each setting applies (the `applies` predicates of the declaration).
+
+/// Every axis the `applies` predicates below read (a test checks that no other axis changes what applies), so
+/// that [`crate::applicability`] enumerates only these.
+pub const APPLICABILITY_INPUTS: &[Axis] = &[Axis::scene, Axis::accel, Axis::split, Axis::strategy, Axis::workload];
 
 /// Generated scenes have a seed; sphere files do not.
 fn generated_scene(s: &Settings) -> bool {
@@ -178,6 +198,16 @@ fn generated_scene(s: &Settings) -> bool {
 /// The tracer's trees have tree settings.
 fn tree(s: &Settings) -> bool {
     s.accel.is_tree()
+}
+
+/// Only the binary trees have the `traversal` order.
+fn binary_tree(s: &Settings) -> bool {
+    s.accel.is_binary_tree()
+}
+
+/// The wide BVH's own settings.
+fn wide(s: &Settings) -> bool {
+    s.accel.is_wide()
 }
 
 /// Only the binned SAH split has bins.
@@ -228,7 +258,14 @@ impl Settings {
                 intersection: self.sah_intersection_cost.unwrap_or(default.sah_costs.intersection),
             },
         };
-        AccelParams { kind, bvh }
+        let wide_default = WideParams::default();
+        let wide = WideParams {
+            width: self.node_width.map_or(wide_default.width, |w| w.0),
+            leaf_block: self.leaf_block.map_or(wide_default.leaf_block, |b| b.0),
+            kernel: self.simd_kernel.unwrap_or(wide_default.kernel),
+            order: self.child_order.unwrap_or(wide_default.order),
+        };
+        AccelParams { kind, bvh, wide }
     }
 
     /// The strategy and its thread count (`threads = "all"` must have been resolved).

@@ -20,6 +20,8 @@ pub mod rows_md;
 pub mod value;
 
 pub use columns::{Axis, AxisValue, Row, Settings};
-pub use names::{Accel, EmbreeIsa, EmbreeQuality, Named, ObvhsQuality, PeerKind, SceneName, Threads, Workload};
+pub use names::{
+    Accel, EmbreeIsa, EmbreeQuality, LeafBlock, Named, NodeWidth, ObvhsQuality, PeerKind, SceneName, Threads, Workload,
+};
 pub use row::{Cell, Column, Kind, Role};
 pub use value::{AxisType, Raw};

@@ -4,6 +4,7 @@
 use std::fmt;
 
 use serde::{Deserialize, Serialize};
+use tracer::accel::wide::{ChildOrdering, Kernel, WideParams};
 use tracer::accel::{AccelKind, Split, Traversal};
 use tracer::executor::StrategyKind;
 use tracer::rays::RayKind;
@@ -37,7 +38,7 @@ macro_rules! named_by_inherent {
     )*};
 }
 
-named_by_inherent!(AccelKind, Split, Traversal, StrategyKind, SceneKind, RayKind);
+named_by_inherent!(AccelKind, Split, Traversal, StrategyKind, SceneKind, RayKind, Kernel, ChildOrdering);
 
 /// Declares a kebab-case enum with its names, `ALL`, `Display` and `Named`.
 macro_rules! named_enum {
@@ -146,6 +147,7 @@ impl Named for Accel {
         Accel::Ours(AccelKind::List),
         Accel::Ours(AccelKind::Bvh),
         Accel::Ours(AccelKind::FlatBvh),
+        Accel::Ours(AccelKind::WideBvh),
         Accel::Peer(PeerKind::ObvhsBvh2),
         Accel::Peer(PeerKind::ObvhsCwbvh),
         Accel::Peer(PeerKind::Embree),
@@ -168,10 +170,56 @@ impl Accel {
         }
     }
 
-    /// True for the tracer's trees (`bvh`, `flat-bvh`): the tree settings apply.
+    /// True for the tracer's trees (`bvh`, `flat-bvh`, and `wide-bvh`, which collapses the same binary tree): the
+    /// tree's build settings apply.
     pub fn is_tree(self) -> bool {
+        matches!(self, Accel::Ours(AccelKind::Bvh | AccelKind::FlatBvh | AccelKind::WideBvh))
+    }
+
+    /// True for the binary trees (`bvh`, `flat-bvh`): their traversal order applies (the wide BVH has its own).
+    pub fn is_binary_tree(self) -> bool {
         matches!(self, Accel::Ours(AccelKind::Bvh | AccelKind::FlatBvh))
     }
+
+    /// True for the wide BVH: its node width, leaf block, SIMD kernel and child order apply.
+    pub fn is_wide(self) -> bool {
+        self == Accel::Ours(AccelKind::WideBvh)
+    }
+}
+
+/// Declares a setting that takes one of a few integers (written as the integer in configs and rows).
+macro_rules! int_choice {
+    ($(#[doc = $doc:literal])* $name:ident = $values:expr) => {
+        $(#[doc = $doc])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        pub struct $name(pub u32);
+
+        impl $name {
+            /// Every allowed value, ascending.
+            pub const VALUES: &'static [u32] = &$values;
+
+            /// The value `n`, if allowed.
+            pub fn new(n: u32) -> Option<$name> {
+                Self::VALUES.contains(&n).then_some($name(n))
+            }
+        }
+
+        impl fmt::Display for $name {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                write!(f, "{}", self.0)
+            }
+        }
+    };
+}
+
+int_choice! {
+    /// Children per node of the wide BVH (`WideParams::WIDTHS`).
+    NodeWidth = WideParams::WIDTHS
+}
+
+int_choice! {
+    /// Spheres per SIMD leaf block of the wide BVH (`WideParams::LEAF_BLOCKS`).
+    LeafBlock = WideParams::LEAF_BLOCKS
 }
 
 /// Where a configuration's spheres come from.
@@ -293,6 +341,8 @@ mod tests {
         round_trip::<ObvhsQuality>();
         round_trip::<EmbreeQuality>();
         round_trip::<EmbreeIsa>();
+        round_trip::<Kernel>();
+        round_trip::<ChildOrdering>();
         assert_eq!(Accel::ALL.len(), AccelKind::ALL.len() + PeerKind::ALL.len());
         assert!(PeerKind::from_name("embree4").is_none());
     }

@@ -2,7 +2,7 @@
 
 use std::fmt::Debug;
 
-use crate::names::{Named, Threads};
+use crate::names::{LeafBlock, Named, NodeWidth, Threads};
 use crate::row::{Cell, Kind};
 
 /// A config value as TOML (or the command line) gives it.
@@ -107,6 +107,37 @@ macro_rules! integer_axis_type {
 }
 
 integer_axis_type!(u32, u64);
+
+macro_rules! int_choice_axis_type {
+    ($($t:ident),*) => {$(
+        impl AxisType for $t {
+            const KIND: Kind = Kind::Int;
+            fn parse(raw: Raw<'_>) -> Result<Self, String> {
+                match raw {
+                    Raw::Int(i) => u32::try_from(i).ok().and_then($t::new).ok_or_else(|| format!("{i} is not allowed")),
+                    other => Err(format!("expected an integer, found {}", other.what())),
+                }
+            }
+            fn allowed(_: &str) -> String {
+                $t::VALUES.iter().map(u32::to_string).collect::<Vec<_>>().join(", ")
+            }
+            fn cell(&self) -> Cell {
+                Cell::Int(i64::from(self.0))
+            }
+            fn from_text(text: &str) -> Result<Self, String> {
+                text.parse().ok().and_then($t::new).ok_or_else(|| format!("expected one of {}, found {text:?}", Self::allowed("")))
+            }
+            fn number(&self) -> Option<f64> {
+                Some(f64::from(self.0))
+            }
+            fn choices() -> Option<Vec<Self>> {
+                Some($t::VALUES.iter().map(|&n| $t(n)).collect())
+            }
+        }
+    )*};
+}
+
+int_choice_axis_type!(NodeWidth, LeafBlock);
 
 impl AxisType for f32 {
     const KIND: Kind = Kind::Float;

@@ -1,5 +1,6 @@
 //! Single-thread build time and primary-ray throughput of every structure and split at 1e3, 1e4, 1e5 spheres,
-//! and the flat BVH's build time in 1- and 2-thread pools at 1e5 and 1e6 spheres.
+//! the flat BVH's build time in 1- and 2-thread pools at 1e5 and 1e6 spheres, and (group `wide`) primary rays
+//! through the flat BVH against the wide BVH's widths and kernels.
 //!
 //! `cargo bench -p tracer --bench accel` (criterion reports primary throughput as elements/s = rays/s).
 //! The scene is random-spheres seed 1; the primary image is 256×192 for trees and 64×48 for the list.
@@ -10,7 +11,8 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use tracer::accel::{AccelKind, AccelParams, AccelVisitor, Accelerator, BuiltAccel, BvhParams, Split, Traversal};
+use tracer::accel::wide::Kernel;
+use tracer::accel::{AccelKind, AccelParams, AccelVisitor, Accelerator, BuiltAccel, BvhParams, Split, Traversal, WideBvh, WideParams};
 use tracer::counters::NoCounters;
 use tracer::executor::Strategy;
 use tracer::render::trace_primary;
@@ -21,9 +23,9 @@ const SIZES: [usize; 3] = [1_000, 10_000, 100_000];
 fn tree_params() -> Vec<AccelParams> {
     let mut all = Vec::new();
     for split in Split::ALL {
-        all.push(AccelParams { kind: AccelKind::Bvh, bvh: BvhParams { split, ..BvhParams::default() } });
+        all.push(AccelParams { kind: AccelKind::Bvh, bvh: BvhParams { split, ..BvhParams::default() }, ..AccelParams::default() });
         for traversal in Traversal::ALL {
-            all.push(AccelParams { kind: AccelKind::FlatBvh, bvh: BvhParams { split, traversal, ..BvhParams::default() } });
+            all.push(AccelParams { kind: AccelKind::FlatBvh, bvh: BvhParams { split, traversal, ..BvhParams::default() }, ..AccelParams::default() });
         }
     }
     all
@@ -67,7 +69,7 @@ fn build_threads(c: &mut Criterion) {
         let scene = SceneKind::RandomSpheres.generate(n, 1);
         group.throughput(Throughput::Elements(n as u64));
         for split in [Split::CentroidMidpoint, Split::BinnedSah] {
-            let p = AccelParams { kind: AccelKind::FlatBvh, bvh: BvhParams { split, ..BvhParams::default() } };
+            let p = AccelParams { kind: AccelKind::FlatBvh, bvh: BvhParams { split, ..BvhParams::default() }, ..AccelParams::default() };
             for (threads, pool) in &pools {
                 let id = BenchmarkId::new(format!("flat-bvh/{}/threads={threads}", split.name()), n);
                 group.bench_function(id, |b| {
@@ -103,5 +105,33 @@ fn primary(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, build, build_threads, primary);
+/// Primary rays through the flat BVH (binned SAH, front to back) and the wide BVH (widths 4 and 8, leaf blocks of 8,
+/// distance order, scalar and AVX2 kernels) at 1e3 and 1e5 spheres; ids `{structure}/{…}/{spheres}`.
+///
+/// The wide BVH's binary tree is the same binned SAH with leaves of up to 8 spheres (one block), its SAH counting
+/// blocks. `cargo bench -p tracer --bench accel -- wide`.
+fn wide(c: &mut Criterion) {
+    let mut group = c.benchmark_group("wide");
+    group.sample_size(10).warm_up_time(Duration::from_millis(300)).measurement_time(Duration::from_secs(1));
+    for n in [1_000, 100_000] {
+        let scene = SceneKind::RandomSpheres.generate(n, 1);
+        let camera = scene.camera.with_resolution(256, 192);
+        group.throughput(Throughput::Elements(camera.width as u64 * camera.height as u64));
+        let flat = BvhParams { split: Split::BinnedSah, traversal: Traversal::FrontToBack, ..BvhParams::default() };
+        let accel = BuiltAccel::build(&scene.spheres, &AccelParams { kind: AccelKind::FlatBvh, bvh: flat, ..AccelParams::default() });
+        group.bench_function(BenchmarkId::new("flat-bvh/binned-sah/front-to-back", n), |b| b.iter(|| black_box(accel.visit(Primary(&camera)))));
+        let bvh = BvhParams { leaf_size: 8, ..flat };
+        for width in WideParams::WIDTHS {
+            let tree = WideBvh::build(&scene.spheres, &bvh, &WideParams { width, kernel: Kernel::Scalar, ..WideParams::default() });
+            for kernel in [Kernel::Scalar, Kernel::Avx2].into_iter().filter(|k| k.is_available()) {
+                let tree = tree.clone().with_kernel(kernel).expect("available");
+                let id = BenchmarkId::new(format!("wide-bvh/w{width}/b8/{}", kernel.name()), n);
+                group.bench_function(id, |b| b.iter(|| black_box(Primary(&camera).visit(&tree))));
+            }
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, build, build_threads, primary, wide);
 criterion_main!(benches);

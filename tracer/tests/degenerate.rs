@@ -73,7 +73,7 @@ fn exponentially_spaced_spheres_stay_within_the_traversal_stack() {
     let spheres: Vec<Sphere> = (0..120).map(|i| Sphere::new(Vec3::new(1.3f32.powi(i), 0.0, 0.0), 0.01)).collect();
     for split in Split::ALL {
         for kind in [AccelKind::Bvh, AccelKind::FlatBvh] {
-            let params = AccelParams { kind, bvh: BvhParams { split, leaf_size: 1, ..BvhParams::default() } };
+            let params = AccelParams { kind, bvh: BvhParams { split, leaf_size: 1, ..BvhParams::default() }, ..AccelParams::default() };
             let depth = BuiltAccel::build(&spheres, &params).stats().depth;
             assert!(depth < tracer::accel::bvh::builder::MAX_DEPTH, "{split:?}: depth {depth}");
         }

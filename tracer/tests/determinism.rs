@@ -79,7 +79,7 @@ fn every_accelerator_renders_the_same_image() {
     for kind in [AccelKind::Bvh, AccelKind::FlatBvh] {
         for split in Split::ALL {
             for traversal in Traversal::ALL {
-                let params = AccelParams { kind, bvh: BvhParams { split, traversal, ..BvhParams::default() } };
+                let params = AccelParams { kind, bvh: BvhParams { split, traversal, ..BvhParams::default() }, ..AccelParams::default() };
                 let (image, _) = BuiltAccel::build(&scene.spheres, &params).visit(Render(&scene, Strategy::SERIAL));
                 assert_eq!(image.hash(), reference.hash(), "{params:?}");
             }

@@ -15,7 +15,7 @@ pub fn estimate_seconds(s: &Settings, cores: usize) -> f64 {
     let per_ray = match (s.accel, s.traversal) {
         (Accel::Peer(_), _) => 25e-9 * n.log2().max(1.0),
         (Accel::Ours(AccelKind::List), _) => 2.5e-9 * n,
-        (_, Some(Traversal::FrontToBack)) => 25e-9 * n.log2().max(1.0),
+        (Accel::Ours(AccelKind::WideBvh), _) | (_, Some(Traversal::FrontToBack)) => 25e-9 * n.log2().max(1.0),
         (_, _) => 25e-9 * n.log2().max(1.0) * (1.0 + n.log10().max(0.0)),
     };
     let parallel = 0.9 * s.strategy().threads.min(cores).max(1) as f64;

@@ -12,6 +12,7 @@ use std::collections::HashSet;
 use std::sync::Arc;
 
 use schema::{Axis, AxisValue, SceneName, Settings, Threads};
+use tracer::accel::wide::Kernel;
 use tracer::scene::{Scene, sphere_file};
 
 use crate::config::{Experiment, Series};
@@ -91,6 +92,20 @@ fn settings(values: &[AxisValue], file: Option<&SphereFile>) -> Settings {
     s
 }
 
+/// Refuses a SIMD kernel this CPU cannot run (before anything is written), naming the ones it can.
+fn check_kernels(file: &str, configurations: &[Configuration]) -> Result<(), Error> {
+    let Some(kernel) = configurations.iter().filter_map(|c| c.settings.simd_kernel).find(|k| !k.is_available()) else {
+        return Ok(());
+    };
+    let allowed = std::iter::once(Kernel::Auto).chain(Kernel::available()).map(Kernel::name).collect::<Vec<_>>();
+    Err(Error::Input(format!(
+        "{file}: {}: {:?} is not available on this CPU (allowed here: {})",
+        Axis::simd_kernel.key(),
+        kernel.name(),
+        allowed.join(", ")
+    )))
+}
+
 impl Plan {
     /// Plans `exp` for a machine with `cores` logical cores; reads the sphere file if the sweep names one.
     pub fn new(exp: &Experiment, cores: usize) -> Result<Plan, Error> {
@@ -148,6 +163,7 @@ impl Plan {
         if configurations.is_empty() {
             return Err(Error::Input(format!("{file}: exclude: every run is excluded (nothing to run)")));
         }
+        check_kernels(&file, &configurations)?;
         let mut notes = Vec::new();
         if !above_cores.is_empty() {
             above_cores.sort_unstable();

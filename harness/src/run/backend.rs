@@ -136,6 +136,14 @@ impl Backend {
         self.visit(Stats)
     }
 
+    /// The SIMD kernel the structure runs (`scalar`, `avx2`, `avx512`), `-` for those without SIMD kernels.
+    pub fn simd_kernel(&self) -> &'static str {
+        match self {
+            Backend::Ours(a) => a.kernel_name().unwrap_or("-"),
+            _ => "-",
+        }
+    }
+
     /// Peer library facts for the row (`-` for the tracer's structures).
     pub fn peer_info(&self) -> String {
         match self {

@@ -31,6 +31,13 @@ pub struct Timing {
     pub stats: TreeStats,
     /// Peer library facts (`-` for the tracer's structures).
     pub peer_info: String,
+    /// The SIMD kernel that ran (`-` for structures without SIMD kernels, and in answers of older workers).
+    #[serde(default = "dash")]
+    pub simd_kernel: String,
+}
+
+fn dash() -> String {
+    "-".into()
 }
 
 impl Timing {
@@ -47,6 +54,7 @@ impl Timing {
             scene_fingerprint: 0,
             stats: Default::default(),
             peer_info: "-".into(),
+            simd_kernel: "-".into(),
         }
     }
 
@@ -147,6 +155,7 @@ pub fn timed(settings: &Settings, file: Option<&Scene>, rays: Option<&RaySet>, s
         scene_fingerprint: scene.fingerprint(),
         stats: backend.stats(),
         peer_info: backend.peer_info(),
+        simd_kernel: backend.simd_kernel().to_string(),
     })
 }
 
@@ -195,6 +204,7 @@ mod tests {
             scene_fingerprint: 42,
             stats: TreeStats { nodes: 7, leaves: 4, depth: 2, bytes: 1024, sah_cost: 3.5 },
             peer_info: "embree 4.4.0 native width 8 (avx/avx2), threads=1".into(),
+            simd_kernel: "avx2".into(),
         };
         let json = serde_json::to_string(&t).unwrap();
         assert_eq!(serde_json::from_str::<Timing>(&json).unwrap(), t);

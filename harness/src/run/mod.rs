@@ -167,6 +167,11 @@ fn row(
     row.reference_checked = v.reference_checked as u64;
     row.wrong_side = v.wrong_side.to_string();
     row.peer_info = t.peer_info.clone();
+    // A configuration never timed (failed validation) records the kernel it was validated with.
+    row.simd_kernel_used = match (t.simd_kernel.as_str(), c.settings.simd_kernel) {
+        ("-", Some(k)) => k.resolve().name().to_string(),
+        (used, _) => used.to_string(),
+    };
     let m = &p.machine;
     row.cpu_vendor = m.cpu_vendor.clone();
     row.cpu_signature = m.cpu_signature.clone();

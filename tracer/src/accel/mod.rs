@@ -1,11 +1,12 @@
 //! Acceleration structures behind one small trait: closest hit and any hit (occlusion).
 //!
 //! [`List`] is the brute-force reference; [`Bvh`] is the paper's pointer tree; [`FlatBvh`] is the same
-//! tree in one array. [`AccelParams`] chooses and parameterizes one at run time, [`BuiltAccel`] holds it,
+//! tree in one array; [`WideBvh`] collapses it into 4- or 8-wide nodes with SIMD sphere leaves. [`AccelParams`] chooses and parameterizes one at run time, [`BuiltAccel`] holds it,
 //! and an [`AccelVisitor`] reaches the concrete type so that hot loops stay monomorphic.
 
 pub mod bvh;
 mod list;
+pub mod wide;
 
 use serde::{Deserialize, Serialize};
 
@@ -14,6 +15,7 @@ use crate::geometry::{Ray, Sphere};
 
 pub use bvh::{Bvh, BvhParams, FlatBvh, Split, Traversal, TreeStats};
 pub use list::List;
+pub use wide::{WideBvh, WideParams};
 
 /// The closest intersection found: distance along the ray and the sphere's index in the scene.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -60,11 +62,13 @@ pub enum AccelKind {
     Bvh,
     /// The same tree in one contiguous array.
     FlatBvh,
+    /// The tree collapsed into 4- or 8-wide nodes with SIMD sphere leaves ([`WideBvh`]).
+    WideBvh,
 }
 
 impl AccelKind {
-    /// Every kind, in the order tools list them.
-    pub const ALL: [AccelKind; 3] = [AccelKind::List, AccelKind::Bvh, AccelKind::FlatBvh];
+    /// Every kind the harness lists, in the order it lists them.
+    pub const ALL: [AccelKind; 4] = [AccelKind::List, AccelKind::Bvh, AccelKind::FlatBvh, AccelKind::WideBvh];
 
     /// The kebab-case name used in configs and on the command line.
     pub fn name(self) -> &'static str {
@@ -72,6 +76,7 @@ impl AccelKind {
             AccelKind::List => "list",
             AccelKind::Bvh => "bvh",
             AccelKind::FlatBvh => "flat-bvh",
+            AccelKind::WideBvh => "wide-bvh",
         }
     }
 }
@@ -81,8 +86,12 @@ impl AccelKind {
 pub struct AccelParams {
     /// The structure.
     pub kind: AccelKind,
-    /// Tree parameters for `Bvh` and `FlatBvh`.
+    /// Tree parameters for `Bvh` and `FlatBvh`, and of the binary tree `WideBvh` is collapsed from.
     pub bvh: BvhParams,
+    /// Parameters of `WideBvh` (ignored by the others). Left out when serialized at their default, and filled
+    /// with it when missing, so the other kinds' serialized parameters are what they were before it existed.
+    #[serde(default, skip_serializing_if = "WideParams::is_default")]
+    pub wide: WideParams,
 }
 
 impl Default for AccelKind {
@@ -100,6 +109,8 @@ pub enum BuiltAccel {
     Bvh(Bvh),
     /// See [`FlatBvh`].
     FlatBvh(FlatBvh),
+    /// See [`WideBvh`].
+    WideBvh(WideBvh),
 }
 
 /// Code run with the concrete accelerator type, so that its loops are compiled for that type.
@@ -111,7 +122,8 @@ pub trait AccelVisitor {
 }
 
 impl BuiltAccel {
-    /// Builds the structure `params` names over `spheres` (the tree parameters must be valid).
+    /// Builds the structure `params` names over `spheres` (the tree parameters must be valid, and for `WideBvh`
+    /// the kernel available on this CPU: see [`WideParams::validate`]).
     ///
     /// Trees build with the threads of the current rayon pool (outside any pool: rayon's global pool), so run
     /// it inside `pool.install(..)` to choose the thread count; the tree is identical whatever the thread count
@@ -121,6 +133,7 @@ impl BuiltAccel {
             AccelKind::List => BuiltAccel::List(List::build(spheres)),
             AccelKind::Bvh => BuiltAccel::Bvh(Bvh::build(spheres, &params.bvh)),
             AccelKind::FlatBvh => BuiltAccel::FlatBvh(FlatBvh::build(spheres, &params.bvh)),
+            AccelKind::WideBvh => BuiltAccel::WideBvh(WideBvh::build(spheres, &params.bvh, &params.wide)),
         }
     }
 
@@ -130,6 +143,7 @@ impl BuiltAccel {
             BuiltAccel::List(a) => visitor.visit(a),
             BuiltAccel::Bvh(a) => visitor.visit(a),
             BuiltAccel::FlatBvh(a) => visitor.visit(a),
+            BuiltAccel::WideBvh(a) => visitor.visit(a),
         }
     }
 
@@ -139,6 +153,15 @@ impl BuiltAccel {
             BuiltAccel::List(a) => a.stats(),
             BuiltAccel::Bvh(a) => a.stats(),
             BuiltAccel::FlatBvh(a) => a.stats(),
+            BuiltAccel::WideBvh(a) => a.stats(),
+        }
+    }
+
+    /// The SIMD kernel the structure runs (`avx2`, …) for a `WideBvh`; `None` for the others.
+    pub fn kernel_name(&self) -> Option<&'static str> {
+        match self {
+            BuiltAccel::WideBvh(a) => Some(a.kernel_name()),
+            _ => None,
         }
     }
 }

@@ -81,7 +81,7 @@ pub struct RayBoxTester {
 
 impl RayBoxTester {
     /// Error bound on the far slab distance (pbrt's `1 + 2 * gamma(3)`): keeps grazing hits inside their box.
-    const FAR_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
+    pub(crate) const FAR_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
     /// Prepares `ray` for box tests. Zero direction components become ±1e-30, so reciprocals stay finite
     /// and no slab distance is ever NaN (a ray that parallel crosses no slab plane within any float range).
@@ -90,6 +90,12 @@ impl RayBoxTester {
         let nonzero = |d: f32| if d.abs() < 1e-30 { 1e-30f32.copysign(d) } else { d };
         let d = ray.dir;
         Self { origin: ray.origin, inv_dir: Vec3::new(nonzero(d.x), nonzero(d.y), nonzero(d.z)).recip(), t_min: ray.t_min }
+    }
+
+    /// The reciprocal direction the slab tests use (zero components replaced as [`RayBoxTester::new`] says).
+    #[inline(always)]
+    pub(crate) fn inv_dir(&self) -> Vec3 {
+        self.inv_dir
     }
 
     /// Entry distance into `b` when the ray meets it before `t_max`, else `f32::INFINITY`.

@@ -1,7 +1,7 @@
 //! Test support shared by the tracer's tests and the harness's peer tests (feature `testing`).
 //!
 //! One definition of "agrees with brute force" for every backend:
-//! - [`every_tree`]: every BVH configuration the tracer can build;
+//! - [`every_tree`]: every BVH configuration the tracer can build ([`every_wide`]: the wide ones this CPU runs);
 //! - [`sphere_ray_mix`] and [`scene_ray_mix`]: ray sets that mix ordinary rays with the cases where traversal
 //!   and intersection go wrong (grazing, inside, finite, non-unit rays and secondary rays);
 //! - [`scenes`]: the generated scenes, each with its [`scene_ray_mix`];
@@ -17,11 +17,13 @@ mod rays;
 pub use agree::{Comparison, Reference, Tolerance, assert_every_tree_agrees};
 pub use rays::{scene_ray_mix, sphere_ray_mix};
 
-use crate::accel::{AccelKind, AccelParams, BvhParams, Split, Traversal};
+use crate::accel::wide::{ChildOrdering, Kernel};
+use crate::accel::{AccelKind, AccelParams, BvhParams, Split, Traversal, WideParams};
 use crate::geometry::{Ray, Sphere};
 use crate::scene::SceneKind;
 
-/// Every tree configuration: both layouts × every split × leaf sizes `1..=16` × both traversal orders (16 SAH bins).
+/// Every tree configuration: both binary layouts × every split × leaf sizes `1..=16` × both traversal orders (16
+/// SAH bins), then [`every_wide`].
 pub fn every_tree() -> Vec<AccelParams> {
     let mut all = Vec::new();
     for kind in [AccelKind::Bvh, AccelKind::FlatBvh] {
@@ -29,7 +31,29 @@ pub fn every_tree() -> Vec<AccelParams> {
             for leaf_size in 1..=BvhParams::MAX_LEAF_SIZE {
                 for traversal in Traversal::ALL {
                     let bvh = BvhParams { leaf_size, split, traversal, sah_bins: 16, ..BvhParams::default() };
-                    all.push(AccelParams { kind, bvh });
+                    all.push(AccelParams { kind, bvh, ..AccelParams::default() });
+                }
+            }
+        }
+    }
+    all.extend(every_wide());
+    all
+}
+
+/// Every wide BVH configuration this CPU can run: every kernel it has ([`Kernel::available`]: scalar, AVX2,
+/// AVX-512) × width × leaf block × child order. The binary tree each is collapsed from cycles through every split ×
+/// leaf sizes 1, 16, 4 and 8 (so leaves of one block, of several blocks and merged subtrees all occur).
+pub fn every_wide() -> Vec<AccelParams> {
+    let mut all = Vec::new();
+    let mut binary = Split::ALL.into_iter().flat_map(|split| [1, 16, 4, 8].map(|leaf_size| (split, leaf_size))).cycle();
+    for kernel in Kernel::available() {
+        for width in WideParams::WIDTHS {
+            for leaf_block in WideParams::LEAF_BLOCKS {
+                for order in ChildOrdering::ALL {
+                    let (split, leaf_size) = binary.next().expect("cycle");
+                    let bvh = BvhParams { split, leaf_size, traversal: Traversal::FrontToBack, ..BvhParams::default() };
+                    let wide = WideParams { width, leaf_block, kernel, order };
+                    all.push(AccelParams { kind: AccelKind::WideBvh, bvh, wide });
                 }
             }
         }

@@ -14,6 +14,7 @@
 use glam::Vec3;
 
 use super::params::{BvhParams, Split};
+use super::sah::CostModel;
 use super::split::{self, Decision, NodeView, binned_sah, object_median, sweep_sah};
 use crate::geometry::{Aabb, Sphere};
 
@@ -68,6 +69,13 @@ pub const PARALLEL_MIN_PRIMS: usize = 4096;
 /// or fewer than [`PARALLEL_MIN_PRIMS`] spheres, it is the serial recursion. The tree is identical whatever the
 /// thread count: same nodes in the same order, same primitive order.
 pub fn build(spheres: &[Sphere], params: &BvhParams) -> BuiltTree {
+    build_in_blocks(spheres, params, 1)
+}
+
+/// [`build`], with the SAH splits counting a leaf's spheres in SIMD blocks of `block` (see [`CostModel`]);
+/// `block = 1` is [`build`] exactly. The other splits ignore `block`.
+pub fn build_in_blocks(spheres: &[Sphere], params: &BvhParams, block: u32) -> BuiltTree {
+    assert!(block >= 1, "a SIMD block holds at least one sphere");
     if let Err(e) = params.validate() {
         panic!("invalid BVH parameters: {e}");
     }
@@ -75,9 +83,9 @@ pub fn build(spheres: &[Sphere], params: &BvhParams) -> BuiltTree {
     let centroids: Vec<Vec3> = spheres.iter().map(|s| s.center).collect();
     let mut prims: Vec<u32> = (0..spheres.len() as u32).collect();
     let nodes = if spheres.len() >= PARALLEL_MIN_PRIMS && rayon::current_num_threads() > 1 {
-        parallel::build(params, &boxes, &centroids, &mut prims)
+        parallel::build(params, block, &boxes, &centroids, &mut prims)
     } else {
-        let mut b = Builder::new(params, &boxes, &centroids, spheres.len());
+        let mut b = Builder::new(params, block, &boxes, &centroids, spheres.len());
         b.build_node(0, &mut prims, 0, 0);
         b.nodes
     };
@@ -94,6 +102,7 @@ const PLACEHOLDER: FlatNode = FlatNode { bounds: Aabb::EMPTY, first: 0, prim_cou
 #[derive(Clone, Copy)]
 struct Inputs<'a> {
     params: &'a BvhParams,
+    costs: CostModel,
     boxes: &'a [Aabb],
     centroids: &'a [Vec3],
 }
@@ -134,9 +143,9 @@ impl Inputs<'_> {
                 Split::CentroidMidpoint => split::centroid_midpoint::split(&view, prims),
                 Split::ObjectMedian => object_median::split(&view, prims),
                 Split::BinnedSah => {
-                    binned_sah::split(&view, prims, p.sah_bins as usize, p.sah_costs, &mut scratch.bins)
+                    binned_sah::split(&view, prims, p.sah_bins as usize, self.costs, &mut scratch.bins)
                 }
-                Split::SweepSah => sweep_sah::split(&view, prims, p.sah_costs, &mut scratch.sweep),
+                Split::SweepSah => sweep_sah::split(&view, prims, self.costs, &mut scratch.sweep),
             }
         };
         let decision = match decision {
@@ -156,10 +165,11 @@ struct Builder<'a> {
 
 impl<'a> Builder<'a> {
     /// A builder whose `nodes` hold the subtree root's slot (index 0) and room for a subtree of `prim_count`.
-    fn new(params: &'a BvhParams, boxes: &'a [Aabb], centroids: &'a [Vec3], prim_count: usize) -> Self {
+    fn new(params: &'a BvhParams, block: u32, boxes: &'a [Aabb], centroids: &'a [Vec3], prim_count: usize) -> Self {
         let mut nodes = Vec::with_capacity(2 * prim_count.max(1));
         nodes.push(PLACEHOLDER);
-        Builder { inputs: Inputs { params, boxes, centroids }, nodes, scratch: Scratch::default() }
+        let costs = CostModel { costs: params.sah_costs, block };
+        Builder { inputs: Inputs { params, costs, boxes, centroids }, nodes, scratch: Scratch::default() }
     }
 
     fn build_node(&mut self, index: usize, prims: &mut [u32], offset: usize, depth: usize) {
@@ -201,8 +211,8 @@ mod parallel {
     }
 
     /// Builds the whole tree; `prims.len() >= PARALLEL_MIN_PRIMS`.
-    pub(super) fn build(params: &BvhParams, boxes: &[Aabb], centroids: &[Vec3], prims: &mut [u32]) -> Vec<FlatNode> {
-        let inputs = Inputs { params, boxes, centroids };
+    pub(super) fn build(params: &BvhParams, block: u32, boxes: &[Aabb], centroids: &[Vec3], prims: &mut [u32]) -> Vec<FlatNode> {
+        let inputs = Inputs { params, costs: CostModel { costs: params.sah_costs, block }, boxes, centroids };
         let (root, desc) = subtree(inputs, prims, 0, 0);
         let mut nodes = Vec::with_capacity(1 + desc.len);
         // Descendant-relative index i is array index 1 + i.
@@ -226,7 +236,7 @@ mod parallel {
     /// descendants) and its descendants.
     fn subtree(inputs: Inputs<'_>, prims: &mut [u32], offset: usize, depth: usize) -> (FlatNode, Descendants) {
         if prims.len() < PARALLEL_MIN_PRIMS {
-            let mut b = Builder::new(inputs.params, inputs.boxes, inputs.centroids, prims.len());
+            let mut b = Builder::new(inputs.params, inputs.costs.block, inputs.boxes, inputs.centroids, prims.len());
             b.build_node(0, prims, offset, depth);
             // Array index i of `b.nodes` (i >= 1) is descendant index i - 1.
             let root = shifted(b.nodes[0], -1);

@@ -54,6 +54,37 @@ impl Hash for SahCosts {
     }
 }
 
+/// The cost model a SAH split evaluates: [`SahCosts`] with spheres counted in SIMD blocks of `block` lanes.
+///
+/// A leaf of `n` spheres costs `intersection * ceil(n / block)` and a split counts each child's spheres the same
+/// way (tinybvh rounds leaf sizes up to its SIMD width in the SAH). With `block = 1` (every tree but the wide
+/// BVH) both costs are bit-identical to [`SahCosts::leaf_cost`] and [`SahCosts::split_cost`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CostModel {
+    /// The cost constants.
+    pub costs: SahCosts,
+    /// Spheres a leaf tests at once (1: one by one).
+    pub block: u32,
+}
+
+impl CostModel {
+    /// Blocks needed for `count` spheres.
+    #[inline(always)]
+    fn blocks(&self, count: usize) -> usize {
+        count.div_ceil(self.block as usize)
+    }
+
+    /// Expected cost of making a node of `count` spheres a leaf.
+    pub fn leaf_cost(&self, count: usize) -> f32 {
+        self.costs.leaf_cost(self.blocks(count))
+    }
+
+    /// Expected cost of splitting a node of surface area `parent_area` into the two given children.
+    pub fn split_cost(&self, parent_area: f32, left_area: f32, left_count: usize, right_area: f32, right_count: usize) -> f32 {
+        self.costs.split_cost(parent_area, left_area, self.blocks(left_count), right_area, self.blocks(right_count))
+    }
+}
+
 /// Expected cost of making a node of `count` spheres a leaf, with unit costs.
 pub fn leaf_cost(count: usize) -> f32 {
     SahCosts::UNIT.leaf_cost(count)

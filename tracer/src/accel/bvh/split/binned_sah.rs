@@ -1,7 +1,7 @@
 //! Binned surface area heuristic (Wald 2007): candidate planes between equal-width centroid bins.
 
 use super::{Decision, NodeView, partition, proper};
-use crate::accel::bvh::sah::SahCosts;
+use crate::accel::bvh::sah::CostModel;
 use crate::geometry::Aabb;
 
 /// Scratch space kept between nodes so that binning allocates once per build.
@@ -13,7 +13,7 @@ pub struct Bins {
 }
 
 /// Chooses the cheapest plane among `bin_count - 1` per axis, or a leaf when that is cheaper and allowed.
-pub fn split(node: &NodeView<'_>, prims: &mut [u32], bin_count: usize, costs: SahCosts, bins: &mut Bins) -> Decision {
+pub fn split(node: &NodeView<'_>, prims: &mut [u32], bin_count: usize, costs: CostModel, bins: &mut Bins) -> Decision {
     let cb = node.centroid_bounds;
     let extent = cb.extent();
     let parent_area = node.bounds.surface_area();

@@ -1,7 +1,7 @@
 //! Full-sweep surface area heuristic: every split position in centroid order on every axis.
 
 use super::{Decision, NodeView, proper};
-use crate::accel::bvh::sah::SahCosts;
+use crate::accel::bvh::sah::CostModel;
 use crate::geometry::Aabb;
 
 /// Scratch space kept between nodes.
@@ -18,7 +18,7 @@ fn sort_on_axis(order: &mut [u32], node: &NodeView<'_>, axis: usize) {
 }
 
 /// Chooses the cheapest split position on any axis, or a leaf when that is cheaper and allowed.
-pub fn split(node: &NodeView<'_>, prims: &mut [u32], costs: SahCosts, sweep: &mut Sweep) -> Decision {
+pub fn split(node: &NodeView<'_>, prims: &mut [u32], costs: CostModel, sweep: &mut Sweep) -> Decision {
     let n = prims.len();
     let parent_area = node.bounds.surface_area();
     let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, left count)

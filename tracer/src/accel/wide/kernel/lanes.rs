@@ -1,0 +1,406 @@
+//! The box and sphere tests written once over a vector of f32 lanes ([`Vf`]: 4, 8 or 16 lanes).
+//!
+//! Every operation is the IEEE operation the scalar code does, in the same order: `min`/`max` are the x86
+//! `(a < b) ? a : b` / `(a > b) ? a : b` that `lo`/`hi` in [`crate::geometry::RayBoxTester`] are, comparisons are
+//! ordered (false on NaN) like Rust's, `copysign` and negation are bit operations.
+
+use std::arch::x86_64::*;
+
+use crate::accel::wide::leaf::Block;
+use crate::accel::wide::node::WideNode;
+use crate::accel::wide::ray::RayLanes;
+use crate::geometry::RayBoxTester;
+
+/// A vector of f32 lanes and its lane mask. Every method is unsafe: it runs only inside a kernel's `run`, on a
+/// CPU with the instructions its implementation uses.
+pub trait Vf: Copy {
+    /// Lane mask (a vector of all-ones lanes, or an AVX-512 mask register).
+    type M: Copy;
+    /// Lanes.
+    const LANES: usize;
+    unsafe fn splat(x: f32) -> Self;
+    /// Loads `LANES` floats from `p` (any alignment).
+    unsafe fn load(p: *const f32) -> Self;
+    unsafe fn store(self, p: *mut f32);
+    unsafe fn add(self, o: Self) -> Self;
+    unsafe fn sub(self, o: Self) -> Self;
+    unsafe fn mul(self, o: Self) -> Self;
+    unsafe fn div(self, o: Self) -> Self;
+    unsafe fn sqrt(self) -> Self;
+    /// `self < o ? self : o`.
+    unsafe fn lo(self, o: Self) -> Self;
+    /// `self > o ? self : o`.
+    unsafe fn hi(self, o: Self) -> Self;
+    /// Magnitude of `self`, sign of `sign`.
+    unsafe fn copysign(self, sign: Self) -> Self;
+    unsafe fn neg(self) -> Self;
+    unsafe fn lt(self, o: Self) -> Self::M;
+    unsafe fn le(self, o: Self) -> Self::M;
+    unsafe fn gt(self, o: Self) -> Self::M;
+    unsafe fn eq(self, o: Self) -> Self::M;
+    unsafe fn and(a: Self::M, b: Self::M) -> Self::M;
+    unsafe fn or(a: Self::M, b: Self::M) -> Self::M;
+    /// `m ? a : b`, lane by lane.
+    unsafe fn select(m: Self::M, a: Self, b: Self) -> Self;
+    /// One bit per lane, lane 0 lowest.
+    unsafe fn bits(m: Self::M) -> u32;
+    /// The smallest lane (no lane is NaN).
+    unsafe fn reduce_lo(self) -> f32;
+}
+
+const SIGN: i32 = i32::MIN;
+
+impl Vf for __m128 {
+    type M = __m128;
+    const LANES: usize = 4;
+    #[inline(always)]
+    unsafe fn splat(x: f32) -> Self {
+        unsafe { _mm_set1_ps(x) }
+    }
+    #[inline(always)]
+    unsafe fn load(p: *const f32) -> Self {
+        unsafe { _mm_loadu_ps(p) }
+    }
+    #[inline(always)]
+    unsafe fn store(self, p: *mut f32) {
+        unsafe { _mm_storeu_ps(p, self) }
+    }
+    #[inline(always)]
+    unsafe fn add(self, o: Self) -> Self {
+        unsafe { _mm_add_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn sub(self, o: Self) -> Self {
+        unsafe { _mm_sub_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn mul(self, o: Self) -> Self {
+        unsafe { _mm_mul_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn div(self, o: Self) -> Self {
+        unsafe { _mm_div_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn sqrt(self) -> Self {
+        unsafe { _mm_sqrt_ps(self) }
+    }
+    #[inline(always)]
+    unsafe fn lo(self, o: Self) -> Self {
+        unsafe { _mm_min_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn hi(self, o: Self) -> Self {
+        unsafe { _mm_max_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn copysign(self, sign: Self) -> Self {
+        unsafe {
+            let s = _mm_castsi128_ps(_mm_set1_epi32(SIGN));
+            _mm_or_ps(_mm_andnot_ps(s, self), _mm_and_ps(s, sign))
+        }
+    }
+    #[inline(always)]
+    unsafe fn neg(self) -> Self {
+        unsafe { _mm_xor_ps(self, _mm_castsi128_ps(_mm_set1_epi32(SIGN))) }
+    }
+    #[inline(always)]
+    unsafe fn lt(self, o: Self) -> Self {
+        unsafe { _mm_cmp_ps::<_CMP_LT_OQ>(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn le(self, o: Self) -> Self {
+        unsafe { _mm_cmp_ps::<_CMP_LE_OQ>(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn gt(self, o: Self) -> Self {
+        unsafe { _mm_cmp_ps::<_CMP_GT_OQ>(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn eq(self, o: Self) -> Self {
+        unsafe { _mm_cmp_ps::<_CMP_EQ_OQ>(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn and(a: Self, b: Self) -> Self {
+        unsafe { _mm_and_ps(a, b) }
+    }
+    #[inline(always)]
+    unsafe fn or(a: Self, b: Self) -> Self {
+        unsafe { _mm_or_ps(a, b) }
+    }
+    #[inline(always)]
+    unsafe fn select(m: Self, a: Self, b: Self) -> Self {
+        unsafe { _mm_blendv_ps(b, a, m) }
+    }
+    #[inline(always)]
+    unsafe fn bits(m: Self) -> u32 {
+        unsafe { _mm_movemask_ps(m) as u32 }
+    }
+    #[inline(always)]
+    unsafe fn reduce_lo(self) -> f32 {
+        unsafe {
+            let m = _mm_min_ps(self, _mm_movehl_ps(self, self));
+            _mm_cvtss_f32(_mm_min_ss(m, _mm_shuffle_ps::<0b01>(m, m)))
+        }
+    }
+}
+
+impl Vf for __m256 {
+    type M = __m256;
+    const LANES: usize = 8;
+    #[inline(always)]
+    unsafe fn splat(x: f32) -> Self {
+        unsafe { _mm256_set1_ps(x) }
+    }
+    #[inline(always)]
+    unsafe fn load(p: *const f32) -> Self {
+        unsafe { _mm256_loadu_ps(p) }
+    }
+    #[inline(always)]
+    unsafe fn store(self, p: *mut f32) {
+        unsafe { _mm256_storeu_ps(p, self) }
+    }
+    #[inline(always)]
+    unsafe fn add(self, o: Self) -> Self {
+        unsafe { _mm256_add_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn sub(self, o: Self) -> Self {
+        unsafe { _mm256_sub_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn mul(self, o: Self) -> Self {
+        unsafe { _mm256_mul_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn div(self, o: Self) -> Self {
+        unsafe { _mm256_div_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn sqrt(self) -> Self {
+        unsafe { _mm256_sqrt_ps(self) }
+    }
+    #[inline(always)]
+    unsafe fn lo(self, o: Self) -> Self {
+        unsafe { _mm256_min_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn hi(self, o: Self) -> Self {
+        unsafe { _mm256_max_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn copysign(self, sign: Self) -> Self {
+        unsafe {
+            let s = _mm256_castsi256_ps(_mm256_set1_epi32(SIGN));
+            _mm256_or_ps(_mm256_andnot_ps(s, self), _mm256_and_ps(s, sign))
+        }
+    }
+    #[inline(always)]
+    unsafe fn neg(self) -> Self {
+        unsafe { _mm256_xor_ps(self, _mm256_castsi256_ps(_mm256_set1_epi32(SIGN))) }
+    }
+    #[inline(always)]
+    unsafe fn lt(self, o: Self) -> Self {
+        unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn le(self, o: Self) -> Self {
+        unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn gt(self, o: Self) -> Self {
+        unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn eq(self, o: Self) -> Self {
+        unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn and(a: Self, b: Self) -> Self {
+        unsafe { _mm256_and_ps(a, b) }
+    }
+    #[inline(always)]
+    unsafe fn or(a: Self, b: Self) -> Self {
+        unsafe { _mm256_or_ps(a, b) }
+    }
+    #[inline(always)]
+    unsafe fn select(m: Self, a: Self, b: Self) -> Self {
+        unsafe { _mm256_blendv_ps(b, a, m) }
+    }
+    #[inline(always)]
+    unsafe fn bits(m: Self) -> u32 {
+        unsafe { _mm256_movemask_ps(m) as u32 }
+    }
+    #[inline(always)]
+    unsafe fn reduce_lo(self) -> f32 {
+        unsafe { _mm_min_ps(_mm256_castps256_ps128(self), _mm256_extractf128_ps::<1>(self)).reduce_lo() }
+    }
+}
+
+impl Vf for __m512 {
+    type M = __mmask16;
+    const LANES: usize = 16;
+    #[inline(always)]
+    unsafe fn splat(x: f32) -> Self {
+        unsafe { _mm512_set1_ps(x) }
+    }
+    #[inline(always)]
+    unsafe fn load(p: *const f32) -> Self {
+        unsafe { _mm512_loadu_ps(p) }
+    }
+    #[inline(always)]
+    unsafe fn store(self, p: *mut f32) {
+        unsafe { _mm512_storeu_ps(p, self) }
+    }
+    #[inline(always)]
+    unsafe fn add(self, o: Self) -> Self {
+        unsafe { _mm512_add_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn sub(self, o: Self) -> Self {
+        unsafe { _mm512_sub_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn mul(self, o: Self) -> Self {
+        unsafe { _mm512_mul_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn div(self, o: Self) -> Self {
+        unsafe { _mm512_div_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn sqrt(self) -> Self {
+        unsafe { _mm512_sqrt_ps(self) }
+    }
+    #[inline(always)]
+    unsafe fn lo(self, o: Self) -> Self {
+        unsafe { _mm512_min_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn hi(self, o: Self) -> Self {
+        unsafe { _mm512_max_ps(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn copysign(self, sign: Self) -> Self {
+        unsafe {
+            let s = _mm512_set1_epi32(SIGN);
+            let (m, g) = (_mm512_castps_si512(self), _mm512_castps_si512(sign));
+            _mm512_castsi512_ps(_mm512_or_si512(_mm512_andnot_si512(s, m), _mm512_and_si512(s, g)))
+        }
+    }
+    #[inline(always)]
+    unsafe fn neg(self) -> Self {
+        unsafe { _mm512_castsi512_ps(_mm512_xor_si512(_mm512_castps_si512(self), _mm512_set1_epi32(SIGN))) }
+    }
+    #[inline(always)]
+    unsafe fn lt(self, o: Self) -> __mmask16 {
+        unsafe { _mm512_cmp_ps_mask::<_CMP_LT_OQ>(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn le(self, o: Self) -> __mmask16 {
+        unsafe { _mm512_cmp_ps_mask::<_CMP_LE_OQ>(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn gt(self, o: Self) -> __mmask16 {
+        unsafe { _mm512_cmp_ps_mask::<_CMP_GT_OQ>(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn eq(self, o: Self) -> __mmask16 {
+        unsafe { _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(self, o) }
+    }
+    #[inline(always)]
+    unsafe fn and(a: __mmask16, b: __mmask16) -> __mmask16 {
+        a & b
+    }
+    #[inline(always)]
+    unsafe fn or(a: __mmask16, b: __mmask16) -> __mmask16 {
+        a | b
+    }
+    #[inline(always)]
+    unsafe fn select(m: __mmask16, a: Self, b: Self) -> Self {
+        unsafe { _mm512_mask_blend_ps(m, b, a) }
+    }
+    #[inline(always)]
+    unsafe fn bits(m: __mmask16) -> u32 {
+        m as u32
+    }
+    #[inline(always)]
+    unsafe fn reduce_lo(self) -> f32 {
+        unsafe { _mm512_reduce_min_ps(self) }
+    }
+}
+
+/// [`super::Ops::boxes`] for `W = V::LANES` children.
+#[inline(always)]
+pub unsafe fn boxes<V: Vf, const W: usize>(node: &WideNode<W>, r: &RayLanes, t_max: f32, dist: &mut [f32; W]) -> u32 {
+    debug_assert_eq!(V::LANES, W);
+    unsafe {
+        let slab = |axis: usize| {
+            let row = r.near_rows[axis];
+            let (o, inv) = (V::splat(r.origin[axis]), V::splat(r.inv[axis]));
+            let near = V::load(node.bounds.as_ptr().add(row).cast()).sub(o).mul(inv);
+            let far = V::load(node.bounds.as_ptr().add(row ^ 1).cast()).sub(o).mul(inv);
+            (near, far)
+        };
+        let ((x0, x1), (y0, y1), (z0, z1)) = (slab(0), slab(1), slab(2));
+        let near = x0.hi(y0).hi(z0.hi(V::splat(r.t_min)));
+        let far = x1.lo(y1).lo(z1).mul(V::splat(RayBoxTester::FAR_SCALE));
+        near.store(dist.as_mut_ptr());
+        V::bits(V::and(near.le(far), near.le(V::splat(t_max))))
+    }
+}
+
+/// Distances (infinity where missed) and hit mask of `V::LANES` spheres from lane `first` of `block`.
+#[inline(always)]
+unsafe fn spheres<V: Vf, const B: usize>(block: &Block<B>, first: usize, r: &RayLanes, t_max: f32) -> (V, V::M) {
+    unsafe {
+        let row = |lanes: &[f32; B]| V::load(lanes.as_ptr().add(first));
+        let (cx, cy, cz, r2) = (row(&block.cx), row(&block.cy), row(&block.cz), row(&block.r2));
+        let (dx, dy, dz) = (V::splat(r.dir[0]), V::splat(r.dir[1]), V::splat(r.dir[2]));
+        let (fx, fy, fz) = (V::splat(r.origin[0]).sub(cx), V::splat(r.origin[1]).sub(cy), V::splat(r.origin[2]).sub(cz));
+        let a = V::splat(r.a);
+        let b = fx.mul(dx).add(fy.mul(dy)).add(fz.mul(dz));
+        let s = b.div(a);
+        let (px, py, pz) = (fx.sub(dx.mul(s)), fy.sub(dy.mul(s)), fz.sub(dz.mul(s)));
+        let disc = a.mul(r2.sub(px.mul(px).add(py.mul(py)).add(pz.mul(pz))));
+        // disc < 0 (or NaN, in padding lanes): sqrt gives NaN, so every comparison below fails.
+        let c = fx.mul(fx).add(fy.mul(fy)).add(fz.mul(fz)).sub(r2);
+        let q = b.add(disc.sqrt().copysign(b)).neg();
+        let (r0, r1) = (c.div(q), q.div(a));
+        let ordered = r0.le(r1);
+        let (near, far) = (V::select(ordered, r0, r1), V::select(ordered, r1, r0));
+        let (t_min, t_max) = (V::splat(r.t_min), V::splat(t_max));
+        let near_ok = V::and(near.gt(t_min), near.lt(t_max));
+        let far_ok = V::and(far.gt(t_min), far.lt(t_max));
+        let t = V::select(near_ok, near, V::select(far_ok, far, V::splat(f32::INFINITY)));
+        (t, V::or(near_ok, far_ok))
+    }
+}
+
+/// [`super::Ops::closest`] in `B / V::LANES` vectors (at most 4).
+#[inline(always)]
+pub unsafe fn closest<V: Vf, const B: usize>(block: &Block<B>, r: &RayLanes, t_max: f32) -> Option<(f32, usize)> {
+    unsafe {
+        let n = B / V::LANES;
+        let mut ts = [V::splat(f32::INFINITY); 4];
+        let mut hit = 0;
+        for (k, t) in ts.iter_mut().enumerate().take(n) {
+            let (tk, mk) = spheres::<V, B>(block, k * V::LANES, r, t_max);
+            *t = tk;
+            hit |= V::bits(mk) << (k * V::LANES);
+        }
+        if hit == 0 {
+            return None;
+        }
+        let nearest = ts[..n].iter().fold(V::splat(f32::INFINITY), |m, &t| m.lo(t)).reduce_lo();
+        let at = V::splat(nearest);
+        let lanes = ts[..n].iter().enumerate().fold(0, |bits, (k, t)| bits | V::bits(t.eq(at)) << (k * V::LANES));
+        Some((nearest, lanes.trailing_zeros() as usize))
+    }
+}
+
+/// [`super::Ops::any`] in `B / V::LANES` vectors.
+#[inline(always)]
+pub unsafe fn any<V: Vf, const B: usize>(block: &Block<B>, r: &RayLanes, t_max: f32) -> bool {
+    unsafe { (0..B / V::LANES).any(|k| V::bits(spheres::<V, B>(block, k * V::LANES, r, t_max).1) != 0) }
+}

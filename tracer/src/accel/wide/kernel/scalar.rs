@@ -1,0 +1,98 @@
+//! The portable kernel: one lane at a time, the same arithmetic as the binary trees' box and sphere tests.
+
+use glam::Vec3;
+
+use super::{Ops, Query};
+use crate::accel::wide::collapse::Tree;
+use crate::accel::wide::leaf::Block;
+use crate::accel::wide::node::WideNode;
+use crate::accel::wide::order::Order;
+use crate::accel::wide::ray::RayLanes;
+use crate::geometry::RayBoxTester;
+
+/// The portable kernel.
+pub struct Scalar;
+
+/// Runs `query` with the portable kernel.
+#[inline(never)]
+pub fn run<Q: Query, O: Order, const W: usize, const B: usize>(query: Q, tree: &Tree<W, B>) -> Q::Out {
+    // SAFETY: the scalar kernel uses no optional instructions.
+    unsafe { query.run::<Scalar, O, W, B>(tree) }
+}
+
+/// Entry distance into child `lane` of `node` before `t_max`, or `None` when missed: [`RayBoxTester::entry`]
+/// with the entry plane chosen by the direction's sign (the same value, as `lo`/`hi` there pick it).
+#[inline(always)]
+fn entry<const W: usize>(node: &WideNode<W>, r: &RayLanes, t_max: f32, lane: usize) -> Option<f32> {
+    let slab = |axis: usize| {
+        let row = r.near_rows[axis];
+        let near = (node.bounds[row][lane] - r.origin[axis]) * r.inv[axis];
+        let far = (node.bounds[row ^ 1][lane] - r.origin[axis]) * r.inv[axis];
+        (near, far)
+    };
+    let hi = |a: f32, b: f32| if a > b { a } else { b };
+    let lo = |a: f32, b: f32| if a < b { a } else { b };
+    let ((x0, x1), (y0, y1), (z0, z1)) = (slab(0), slab(1), slab(2));
+    let near = hi(hi(x0, y0), hi(z0, r.t_min));
+    let far = lo(lo(x1, y1), z1) * RayBoxTester::FAR_SCALE;
+    (near <= far && near <= t_max).then_some(near)
+}
+
+/// Nearest root of lane `lane`'s sphere in `(t_min, t_max)`, or infinity: [`crate::geometry::Sphere::intersect`]
+/// with the squared radius stored. Padding lanes (NaN) never hit.
+#[inline(always)]
+pub(crate) fn sphere<const B: usize>(block: &Block<B>, r: &RayLanes, t_max: f32, lane: usize) -> f32 {
+    let c = Vec3::new(block.cx[lane], block.cy[lane], block.cz[lane]);
+    let r2 = block.r2[lane];
+    let d = Vec3::from_array(r.dir);
+    let f = Vec3::from_array(r.origin) - c;
+    let a = r.a;
+    let b = f.dot(d);
+    let offset = f - d * (b / a);
+    let disc = a * (r2 - offset.dot(offset));
+    if disc < 0.0 {
+        return f32::INFINITY;
+    }
+    let c = f.dot(f) - r2;
+    let q = -(b + disc.sqrt().copysign(b));
+    let (r0, r1) = (c / q, q / a);
+    let (near, far) = if r0 <= r1 { (r0, r1) } else { (r1, r0) };
+    if near > r.t_min && near < t_max {
+        near
+    } else if far > r.t_min && far < t_max {
+        far
+    } else {
+        f32::INFINITY
+    }
+}
+
+impl Ops for Scalar {
+    #[inline(always)]
+    unsafe fn boxes<const W: usize>(node: &WideNode<W>, r: &RayLanes, t_max: f32, dist: &mut [f32; W]) -> u32 {
+        let mut mask = 0;
+        for (lane, d) in dist.iter_mut().enumerate() {
+            if let Some(t) = entry(node, r, t_max, lane) {
+                *d = t;
+                mask |= 1 << lane;
+            }
+        }
+        mask
+    }
+
+    #[inline(always)]
+    unsafe fn closest<const B: usize>(block: &Block<B>, r: &RayLanes, t_max: f32) -> Option<(f32, usize)> {
+        let mut best: Option<(f32, usize)> = None;
+        for lane in 0..B {
+            let t = sphere(block, r, t_max, lane);
+            if t < best.map_or(t_max, |b| b.0) {
+                best = Some((t, lane));
+            }
+        }
+        best
+    }
+
+    #[inline(always)]
+    unsafe fn any<const B: usize>(block: &Block<B>, r: &RayLanes, t_max: f32) -> bool {
+        (0..B).any(|lane| sphere(block, r, t_max, lane) < t_max)
+    }
+}

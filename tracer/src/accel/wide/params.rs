@@ -1,0 +1,182 @@
+//! The wide BVH's own parameters: node width, leaf block, SIMD kernel and child order.
+
+use serde::{Deserialize, Serialize};
+
+use crate::accel::bvh::ParamError;
+
+/// The instruction set the traversal runs with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Kernel {
+    /// The best this CPU has, resolved when the tree is built (AVX-512, else AVX2, else scalar).
+    Auto,
+    /// Portable code, one lane at a time (the compiler may still vectorize it with the baseline ISA).
+    Scalar,
+    /// AVX2 and FMA: 8 lanes of f32 (4-lane nodes and blocks use 128-bit vectors).
+    Avx2,
+    /// AVX-512F: 16-lane leaf blocks; narrower nodes and blocks as in AVX2.
+    Avx512,
+}
+
+impl Kernel {
+    /// Every kernel, in the order tools list them.
+    pub const ALL: [Kernel; 4] = [Kernel::Auto, Kernel::Scalar, Kernel::Avx2, Kernel::Avx512];
+
+    /// The kebab-case name used in configs and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kernel::Auto => "auto",
+            Kernel::Scalar => "scalar",
+            Kernel::Avx2 => "avx2",
+            Kernel::Avx512 => "avx512",
+        }
+    }
+
+    /// True when this CPU can run the kernel (`auto` always can).
+    pub fn is_available(self) -> bool {
+        match self {
+            Kernel::Auto | Kernel::Scalar => true,
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx2 => std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma"),
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx512 => Kernel::Avx2.is_available() && std::arch::is_x86_feature_detected!("avx512f"),
+            #[cfg(not(target_arch = "x86_64"))]
+            Kernel::Avx2 | Kernel::Avx512 => false,
+        }
+    }
+
+    /// The kernels this CPU can run, auto resolved: scalar always, then AVX2 and AVX-512 where present.
+    pub fn available() -> Vec<Kernel> {
+        [Kernel::Scalar, Kernel::Avx2, Kernel::Avx512].into_iter().filter(|k| k.is_available()).collect()
+    }
+
+    /// The kernel that runs: `auto` becomes the widest available one; others are themselves.
+    pub fn resolve(self) -> Kernel {
+        match self {
+            Kernel::Auto => *Kernel::available().last().expect("scalar is always available"),
+            k => k,
+        }
+    }
+}
+
+/// The order in which a traversal visits the children of a wide node that the ray enters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ChildOrdering {
+    /// Stored order (the binary tree's left-to-right order).
+    None,
+    /// Nearest entry distance first (children sorted by the slab test's entry distance).
+    Distance,
+    /// An order precomputed per node for each of the 8 ray-direction octants (children sorted along the octant's
+    /// diagonal by box center).
+    Octant,
+}
+
+impl ChildOrdering {
+    /// Every ordering, in the order tools list them.
+    pub const ALL: [ChildOrdering; 3] = [ChildOrdering::None, ChildOrdering::Distance, ChildOrdering::Octant];
+
+    /// The kebab-case name used in configs and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            ChildOrdering::None => "none",
+            ChildOrdering::Distance => "distance",
+            ChildOrdering::Octant => "octant",
+        }
+    }
+}
+
+/// Parameters of a wide BVH (the binary tree it is collapsed from has its own [`crate::accel::BvhParams`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct WideParams {
+    /// Children per node, in [`WideParams::WIDTHS`].
+    pub width: u32,
+    /// Spheres a leaf tests at once (SIMD lanes of one leaf block), in [`WideParams::LEAF_BLOCKS`].
+    pub leaf_block: u32,
+    /// The instruction set; see [`Kernel`].
+    pub kernel: Kernel,
+    /// The child visiting order; see [`ChildOrdering`].
+    pub order: ChildOrdering,
+}
+
+impl Default for WideParams {
+    fn default() -> Self {
+        Self { width: 8, leaf_block: 8, kernel: Kernel::Auto, order: ChildOrdering::Distance }
+    }
+}
+
+impl WideParams {
+    /// Allowed `width` values.
+    pub const WIDTHS: [u32; 2] = [4, 8];
+    /// Allowed `leaf_block` values.
+    pub const LEAF_BLOCKS: [u32; 3] = [4, 8, 16];
+
+    /// True for the default parameters (serialized parameters of other structures leave them out).
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+
+    /// Checks every value, and that this CPU can run the kernel; builders refuse invalid parameters.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        let list = |values: &[u32]| values.iter().map(u32::to_string).collect::<Vec<_>>().join(", ");
+        if !Self::WIDTHS.contains(&self.width) {
+            return Err(ParamError { key: "width", allowed: list(&Self::WIDTHS), found: self.width.to_string() });
+        }
+        if !Self::LEAF_BLOCKS.contains(&self.leaf_block) {
+            let found = self.leaf_block.to_string();
+            return Err(ParamError { key: "leaf_block", allowed: list(&Self::LEAF_BLOCKS), found });
+        }
+        if !self.kernel.is_available() {
+            let names = std::iter::once(Kernel::Auto).chain(Kernel::available()).map(Kernel::name).collect::<Vec<_>>();
+            let allowed = format!("{} (this CPU lacks {})", names.join(", "), self.kernel.name());
+            return Err(ParamError { key: "kernel", allowed, found: self.kernel.name().to_owned() });
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn out_of_range_values_name_the_allowed_ones() {
+        let e = WideParams { width: 6, ..WideParams::default() }.validate().unwrap_err();
+        assert_eq!((e.key, e.allowed.as_str()), ("width", "4, 8"));
+        let e = WideParams { leaf_block: 2, ..WideParams::default() }.validate().unwrap_err();
+        assert_eq!((e.key, e.allowed.as_str()), ("leaf_block", "4, 8, 16"));
+        assert!(WideParams::default().validate().is_ok());
+    }
+
+    #[test]
+    fn auto_resolves_to_an_available_kernel() {
+        let k = Kernel::Auto.resolve();
+        assert_ne!(k, Kernel::Auto);
+        assert!(k.is_available());
+        assert_eq!(Kernel::Scalar.resolve(), Kernel::Scalar);
+    }
+
+    #[test]
+    fn a_kernel_this_cpu_lacks_is_refused_by_name() {
+        for kernel in [Kernel::Avx2, Kernel::Avx512] {
+            let r = WideParams { kernel, ..WideParams::default() }.validate();
+            if kernel.is_available() {
+                assert!(r.is_ok());
+            } else {
+                let e = r.unwrap_err();
+                assert_eq!((e.key, e.found.as_str()), ("kernel", kernel.name()));
+                assert!(e.to_string().contains("lacks"), "{e}");
+            }
+        }
+    }
+
+    #[test]
+    fn serializes_in_kebab_case_and_fills_defaults() {
+        let p: WideParams = serde_json::from_str(r#"{"width": 4, "kernel": "avx512", "order": "octant"}"#).unwrap();
+        assert_eq!(p, WideParams { width: 4, kernel: Kernel::Avx512, order: ChildOrdering::Octant, ..WideParams::default() });
+        let text = serde_json::to_string(&WideParams::default()).unwrap();
+        assert_eq!(text, r#"{"width":8,"leaf_block":8,"kernel":"auto","order":"distance"}"#);
+        assert!(serde_json::from_str::<WideParams>(r#"{"widht": 4}"#).is_err());
+    }
+}
