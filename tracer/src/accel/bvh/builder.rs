@@ -102,7 +102,8 @@ const PLACEHOLDER: FlatNode = FlatNode { bounds: Aabb::EMPTY, first: 0, prim_cou
 #[derive(Clone, Copy)]
 struct Inputs<'a> {
     params: &'a BvhParams,
-    costs: CostModel,
+    /// Spheres per SIMD leaf block the SAH splits count in (see [`CostModel`]).
+    block: u32,
     boxes: &'a [Aabb],
     centroids: &'a [Vec3],
 }
@@ -115,6 +116,12 @@ struct Scratch {
 }
 
 impl Inputs<'_> {
+    /// The SAH cost model of this build.
+    #[inline(always)]
+    fn costs(&self) -> CostModel {
+        CostModel { costs: self.params.sah_costs, block: self.block }
+    }
+
     /// The node's bounds and what to do with it (leaf or split point, after reordering `prims`).
     #[inline(always)]
     fn decide(&self, prims: &mut [u32], depth: usize, scratch: &mut Scratch) -> (Aabb, Decision) {
@@ -143,9 +150,9 @@ impl Inputs<'_> {
                 Split::CentroidMidpoint => split::centroid_midpoint::split(&view, prims),
                 Split::ObjectMedian => object_median::split(&view, prims),
                 Split::BinnedSah => {
-                    binned_sah::split(&view, prims, p.sah_bins as usize, self.costs, &mut scratch.bins)
+                    binned_sah::split(&view, prims, p.sah_bins as usize, self.costs(), &mut scratch.bins)
                 }
-                Split::SweepSah => sweep_sah::split(&view, prims, self.costs, &mut scratch.sweep),
+                Split::SweepSah => sweep_sah::split(&view, prims, self.costs(), &mut scratch.sweep),
             }
         };
         let decision = match decision {
@@ -168,8 +175,7 @@ impl<'a> Builder<'a> {
     fn new(params: &'a BvhParams, block: u32, boxes: &'a [Aabb], centroids: &'a [Vec3], prim_count: usize) -> Self {
         let mut nodes = Vec::with_capacity(2 * prim_count.max(1));
         nodes.push(PLACEHOLDER);
-        let costs = CostModel { costs: params.sah_costs, block };
-        Builder { inputs: Inputs { params, costs, boxes, centroids }, nodes, scratch: Scratch::default() }
+        Builder { inputs: Inputs { params, block, boxes, centroids }, nodes, scratch: Scratch::default() }
     }
 
     fn build_node(&mut self, index: usize, prims: &mut [u32], offset: usize, depth: usize) {
@@ -212,7 +218,7 @@ mod parallel {
 
     /// Builds the whole tree; `prims.len() >= PARALLEL_MIN_PRIMS`.
     pub(super) fn build(params: &BvhParams, block: u32, boxes: &[Aabb], centroids: &[Vec3], prims: &mut [u32]) -> Vec<FlatNode> {
-        let inputs = Inputs { params, costs: CostModel { costs: params.sah_costs, block }, boxes, centroids };
+        let inputs = Inputs { params, block, boxes, centroids };
         let (root, desc) = subtree(inputs, prims, 0, 0);
         let mut nodes = Vec::with_capacity(1 + desc.len);
         // Descendant-relative index i is array index 1 + i.
@@ -236,7 +242,7 @@ mod parallel {
     /// descendants) and its descendants.
     fn subtree(inputs: Inputs<'_>, prims: &mut [u32], offset: usize, depth: usize) -> (FlatNode, Descendants) {
         if prims.len() < PARALLEL_MIN_PRIMS {
-            let mut b = Builder::new(inputs.params, inputs.costs.block, inputs.boxes, inputs.centroids, prims.len());
+            let mut b = Builder::new(inputs.params, inputs.block, inputs.boxes, inputs.centroids, prims.len());
             b.build_node(0, prims, offset, depth);
             // Array index i of `b.nodes` (i >= 1) is descendant index i - 1.
             let root = shifted(b.nodes[0], -1);
