@@ -550,7 +550,7 @@ pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
     let new_copy = copy_running(&build)?;
     let (old_bin, new_bin) = (base_binary(&root, &build, &rev)?, new_copy.0.clone());
     let bins = (old_bin.as_path(), new_bin.as_path());
-    let rounds = (exp.warmups, exp.repetitions);
+    let rounds = (exp.warmups, exp.repetitions.max());
     let all: Vec<&Configuration> = plan.configurations.iter().collect();
     let mut pairs = measure(&plan, &all, rounds, bins, &root, "")?;
     let speed = |c: &Configuration, pair: &Pair| {
@@ -576,7 +576,7 @@ pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
         "Trace time per configuration, new / old (below 1: faster), 95% bootstrap interval; {} rounds, interleaved. \
          A single-thread configuration flagged as slower is measured again the same way and fails only if that \
          agrees.\n",
-        exp.repetitions
+        exp.repetitions.max()
     );
     println!(
         "| series | settings | old median (s) | new median (s) | new / old [95% CI] | verdict | measured again: new / old \

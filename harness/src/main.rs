@@ -26,7 +26,7 @@ use clap::Parser;
 use report::spec::Verdict;
 
 use cli::{BaselineCommand, CheckArgs, Command, HistoryCommand, ReportArgs, RunArgs, SlurmCommand, ValidateArgs};
-use config::Experiment;
+use config::{Experiment, Repetitions};
 use error::Error;
 use plan::Plan;
 
@@ -239,8 +239,20 @@ fn validate_command(args: &ValidateArgs) -> Result<(), Error> {
     }).collect();
     println!("{}: ok", exp.path.display());
     println!("configurations {} ({})", plan.configurations.len(), series.join(", "));
-    println!("runs           {} recorded ({} repetitions each) + {} warm-ups, order {}", plan.recorded_runs(), exp.repetitions, plan.runs.len() - plan.recorded_runs(), format!("{:?}", exp.order).to_lowercase());
-    println!("estimate       ~{:.0} s on {cores} cores (rough cost model, within about 2x)", seconds);
+    let each = match exp.repetitions {
+        Repetitions::Fixed(n) => format!("{n} repetitions each"),
+        Repetitions::Auto { min, max, target_width } => {
+            format!("auto: {min} to {max} repetitions each, until the median's 95% interval is within {:.1}%", target_width * 100.0)
+        }
+    };
+    let warmups = plan.runs.len() - plan.recorded_runs();
+    println!("runs           at most {} recorded ({each}) + {warmups} warm-ups, order {}", plan.recorded_runs(), format!("{:?}", exp.order).to_lowercase());
+    let fewest = exp.repetitions.min() as f64 / exp.repetitions.max() as f64;
+    if fewest < 1.0 {
+        println!("estimate       ~{:.0} to ~{:.0} s on {cores} cores (rough cost model, within about 2x)", seconds * fewest, seconds);
+    } else {
+        println!("estimate       ~{:.0} s on {cores} cores (rough cost model, within about 2x)", seconds);
+    }
     for n in &plan.notes {
         println!("note           {n}");
     }

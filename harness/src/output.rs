@@ -1,48 +1,168 @@
-//! What the user sees while a sweep runs: a progress bar with ETA on a terminal, plain lines otherwise.
+//! What the user sees while a sweep runs: a progress bar on a terminal, plain lines otherwise, both with the
+//! estimated time left from the first run on.
+//!
+//! The estimate weighs every run by its configuration's cost: the cost model's seconds before a configuration
+//! ran ([`crate::plan::estimate_seconds`], scaled by how far off the model was on the runs so far), then the
+//! mean wall time of its own runs. The runs still expected come from the sweep (with `repetitions = "auto"`
+//! an expectation, see `run::adaptive`).
 
 use std::io::IsTerminal;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-/// Progress over a known number of runs.
+/// Progress over a sweep's runs.
 pub struct Progress {
     bar: Option<ProgressBar>,
-    total: usize,
+    /// The cost model's seconds for one run of each configuration.
+    model: Vec<f64>,
+    /// Wall seconds and count of each configuration's finished runs.
+    measured: Vec<(f64, u32)>,
+    started: Instant,
     done: usize,
+    /// Runs still expected, and their expected seconds.
+    runs_left: f64,
+    seconds_left: f64,
+    /// When the last plain line was printed (lines come at most every 2 s, and for slow runs).
+    last_line: Option<Instant>,
+}
+
+/// `1h02m`, `4m05s` or `12s`.
+pub fn duration(seconds: f64) -> String {
+    let s = seconds.max(0.0).round() as u64;
+    match s {
+        0..60 => format!("{s}s"),
+        60..3600 => format!("{}m{:02}s", s / 60, s % 60),
+        _ => format!("{}h{:02}m", s / 3600, s / 60 % 60),
+    }
 }
 
 impl Progress {
-    /// Progress over `total` runs.
-    pub fn new(total: usize) -> Self {
+    /// Progress over runs of configurations whose cost model gives `model[config]` seconds per run.
+    pub fn new(model: Vec<f64>) -> Self {
         let bar = std::io::stderr().is_terminal().then(|| {
-            let bar = ProgressBar::new(total as u64);
+            let bar = ProgressBar::new(0);
             bar.set_style(
-                ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} elapsed, ETA {eta}  {msg}")
+                ProgressStyle::with_template("{bar:40} {pos}/~{len} runs, {elapsed} elapsed, {prefix}  {msg}")
                     .expect("valid template"),
             );
             bar.enable_steady_tick(Duration::from_millis(250));
             bar
         });
-        Self { bar, total, done: 0 }
+        let measured = vec![(0.0, 0); model.len()];
+        Self {
+            bar,
+            model,
+            measured,
+            started: Instant::now(),
+            done: 0,
+            runs_left: 0.0,
+            seconds_left: 0.0,
+            last_line: None,
+        }
     }
 
-    /// Marks one run finished; `what` describes it.
-    pub fn finished(&mut self, what: &str) {
+    /// How far off the cost model has been: measured seconds over modelled seconds of the configurations run.
+    fn model_scale(&self) -> f64 {
+        let (mut measured, mut modelled) = (0.0, 0.0);
+        for (&(seconds, n), &model) in self.measured.iter().zip(&self.model) {
+            if n > 0 {
+                measured += seconds;
+                modelled += model * n as f64;
+            }
+        }
+        if modelled > 0.0 { measured / modelled } else { 1.0 }
+    }
+
+    /// Expected seconds of one more run of `config`.
+    fn run_seconds(&self, config: usize, scale: f64) -> f64 {
+        match self.measured[config] {
+            (seconds, n) if n > 0 => seconds / n as f64,
+            _ => self.model[config] * scale,
+        }
+    }
+
+    /// Sets what is left: `runs(config)` further runs expected of each configuration.
+    pub fn update(&mut self, runs: impl Fn(usize) -> f64) {
+        let scale = self.model_scale();
+        let (mut count, mut seconds) = (0.0, 0.0);
+        for config in 0..self.model.len() {
+            let r = runs(config);
+            if r > 0.0 {
+                count += r;
+                seconds += r * self.run_seconds(config, scale);
+            }
+        }
+        let first = self.done == 0 && self.last_line.is_none();
+        (self.runs_left, self.seconds_left) = (count, seconds);
+        match &self.bar {
+            Some(bar) => {
+                bar.set_length((self.done as f64 + count).round() as u64);
+                bar.set_prefix(format!("about {} left", duration(seconds)));
+            }
+            None if first => {
+                eprintln!("about {:.0} runs, estimated {} (cost model, within about 2x)", count, duration(seconds));
+                self.last_line = Some(Instant::now());
+            }
+            None => {}
+        }
+    }
+
+    /// Marks one run of `config` finished, after `seconds` of wall time; `what` describes it.
+    pub fn finished(&mut self, config: usize, seconds: f64, what: &str) {
         self.done += 1;
+        let m = &mut self.measured[config];
+        *m = (m.0 + seconds, m.1 + 1);
         match &self.bar {
             Some(bar) => {
                 bar.set_message(what.to_string());
                 bar.inc(1);
             }
-            None => eprintln!("[{:>w$}/{}] {what}", self.done, self.total, w = self.total.to_string().len()),
+            None => {
+                let now = Instant::now();
+                if self.last_line.is_none_or(|t| now - t >= Duration::from_secs(2)) || seconds >= 1.0 {
+                    // The estimate printed is the one from before this run (update() follows): close enough.
+                    eprintln!(
+                        "[{}/~{:.0}] {} elapsed, about {} left: {what}",
+                        self.done,
+                        self.done as f64 + self.runs_left - 1.0,
+                        duration(self.started.elapsed().as_secs_f64()),
+                        duration(self.seconds_left - seconds.min(self.seconds_left))
+                    );
+                    self.last_line = Some(now);
+                }
+            }
         }
     }
 
-    /// Removes the bar.
+    /// Removes the bar and says how long it took.
     pub fn finish(self) {
-        if let Some(bar) = self.bar {
+        if let Some(bar) = &self.bar {
             bar.finish_and_clear();
         }
+        eprintln!("{} runs in {}", self.done, duration(self.started.elapsed().as_secs_f64()));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn durations_read_as_minutes_and_seconds() {
+        assert_eq!(duration(4.4), "4s");
+        assert_eq!(duration(245.0), "4m05s");
+        assert_eq!(duration(3720.0), "1h02m");
+    }
+
+    #[test]
+    fn the_estimate_uses_the_model_until_a_configuration_ran_then_its_own_times() {
+        let mut p = Progress { bar: None, ..Progress::new(vec![1.0, 2.0]) };
+        p.update(|_| 3.0);
+        assert_eq!(p.seconds_left, 9.0, "model only: 3 x 1 s + 3 x 2 s");
+        p.finished(0, 0.5, "a");
+        p.update(|c| if c == 0 { 2.0 } else { 3.0 });
+        // Configuration 0 ran at half the model's time: its own mean (0.5 s) and the model scaled by 0.5 for 1.
+        assert_eq!(p.seconds_left, 2.0 * 0.5 + 3.0 * 1.0);
     }
 }

@@ -50,7 +50,22 @@ fn bad_configs_exit_2_with_one_line_and_write_nothing() {
         (
             "wrong type",
             "name = \"t\"\nrepetitions = \"five\"\n[sweep]\n",
-            "repetitions: expected an integer in 1..=1000, found a string",
+            "repetitions: expected an integer in 1..=1000 or \"auto\", found \"five\"",
+        ),
+        (
+            "auto key without auto",
+            "name = \"t\"\nrepetitions = 5\nmin_repetitions = 3\n[sweep]\n",
+            "min_repetitions: applies only with repetitions = \"auto\" (allowed there: min_repetitions, max_repetitions, target_ci_width)",
+        ),
+        (
+            "auto max below min",
+            "name = \"t\"\nrepetitions = \"auto\"\nmin_repetitions = 6\nmax_repetitions = 4\n[sweep]\n",
+            "max_repetitions: 4 is below min_repetitions 6 (allowed: 6..=1000)",
+        ),
+        (
+            "auto target out of range",
+            "name = \"t\"\n[sweep]\n[quick]\nrepetitions = \"auto\"\ntarget_ci_width = 3\n",
+            "quick.target_ci_width: 3 is out of range (allowed: 0.0001..=1)",
         ),
         (
             "empty sweep",
@@ -191,9 +206,12 @@ fn validate_prints_runs_and_an_estimate() {
     let o = harness().args(["validate", "experiments/paper.toml"]).output().unwrap();
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(out.contains("configurations 414"), "{out}");
-    assert!(out.contains("runs           2070 recorded"), "{out}");
-    assert!(out.contains("estimate"), "{out}");
+    assert!(out.contains("configurations 162"), "{out}");
+    assert!(
+        out.contains("runs           at most 810 recorded (auto: 3 to 5 repetitions each, until the median's 95% interval is within 5.0%)"),
+        "{out}"
+    );
+    assert!(out.contains("estimate       ~"), "{out}");
 }
 
 #[test]
@@ -243,6 +261,72 @@ fn a_killed_sweep_resumes_without_losing_or_duplicating_rows() {
     let o =
         harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--resume"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}
+
+/// The cells of `column` in a runs.csv, row by row (for columns without commas in their values).
+fn column(runs: &Path, column: &str) -> Vec<String> {
+    let text = std::fs::read_to_string(runs).unwrap();
+    let mut lines = text.lines();
+    let i = lines.next().unwrap().split(',').position(|h| h == column).unwrap();
+    lines.map(|l| l.split(',').nth(i).unwrap().to_string()).collect()
+}
+
+/// Keeps the header and the first `rows` rows of a runs.csv (as if the sweep had been killed there).
+fn keep_rows(runs: &Path, rows: usize) {
+    let text = std::fs::read_to_string(runs).unwrap();
+    let kept: Vec<&str> = text.lines().take(rows + 1).collect();
+    std::fs::write(runs, kept.join("\n") + "\n").unwrap();
+}
+
+#[test]
+fn auto_repetitions_stop_when_the_interval_is_narrow_and_at_the_maximum_otherwise() {
+    let (_, flat, ..) = names();
+    let dir = temp("auto");
+    let cfg = dir.join("auto.toml");
+    let run = |extra: &str, resume: bool| {
+        let text = format!(
+            "name = \"auto\"\nrepetitions = \"auto\"\nmin_repetitions = 2\nmax_repetitions = 4\n{extra}\n[sweep]\n\
+             accel = \"{flat}\"\nobjects = [50, 60]\nwidth = 32\nheight = 24\nworkload = \"primary\"\n"
+        );
+        std::fs::write(&cfg, text).unwrap();
+        let out = dir.join("out");
+        let mut args = vec!["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()];
+        if resume {
+            args.push("--resume");
+        }
+        let o = harness().args(&args).output().unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        out
+    };
+
+    // A counter is the same in every repetition: its interval has width 0 from the second on, so every
+    // configuration stops at the minimum.
+    let out = run("speedup_metric = \"nodes_per_ray\"", false);
+    let runs = out.join("runs.csv");
+    assert_eq!(recorded(&runs).len(), 2 * 2, "2 configurations x min_repetitions");
+    assert!(column(&runs, "repetition_rule").iter().all(|r| r == "auto 2..4 width 0.03 nodes_per_ray"));
+    assert_eq!(column(&runs, "interval_width"), ["", "", "0.0", "0.0"]);
+    let report = std::fs::read_to_string(out.join("REPORT.md")).unwrap();
+    assert!(report.contains("2 of 2 configurations got there, 0 stopped at 4"), "{report}");
+    // Killed after its first row: the resumed sweep records the rest and no more.
+    keep_rows(&runs, 1);
+    run("speedup_metric = \"nodes_per_ray\"", true);
+    assert_eq!(recorded(&runs).len(), 4);
+
+    // A target no timing meets: every configuration runs to the maximum, and a resumed sweep counts the rows it
+    // already has.
+    let out = run("target_ci_width = 0.0001", false);
+    let runs = out.join("runs.csv");
+    assert_eq!(recorded(&runs).len(), 2 * 4, "2 configurations x max_repetitions");
+    let widths = column(&runs, "interval_width");
+    assert!(widths[2..].iter().all(|w| w.parse::<f64>().unwrap() > 0.0001), "{widths:?}");
+    keep_rows(&runs, 5);
+    let before = recorded(&runs);
+    run("target_ci_width = 0.0001", true);
+    let after = recorded(&runs);
+    assert_eq!(after.len(), 8, "no row lost or added: {after:?}");
+    assert_eq!(after[..5], before[..]);
+    assert_eq!(after.iter().collect::<HashSet<_>>().len(), 8, "no row duplicated");
 }
 
 #[test]

@@ -1,6 +1,6 @@
 //! REPORT.md: what ran, notes, figures, claims, a summary table pooled over seeds, the config.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
 use crate::claims::ClaimResult;
@@ -102,6 +102,7 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
         num(load_max)
     );
     machines(md, runs);
+    repetitions_line(md, runs);
     let _ = writeln!(
         md,
         "- Code: commit {}{}; {}; harness {}",
@@ -123,6 +124,48 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
             md,
             "> **Warning:** {over} rows ran with more threads than the machine's logical cores; \
              their times measure oversubscription.\n"
+        );
+    }
+}
+
+/// How many repetitions the configurations got under `repetitions = "auto"`: how many stopped because their
+/// interval was narrow enough, and how many at the maximum (nothing for fixed repetitions).
+fn repetitions_line(md: &mut String, runs: &[Run]) {
+    // Per configuration: its rule, repetitions and the interval width after its last one.
+    let mut configs: BTreeMap<&str, (&str, u32, f64)> = BTreeMap::new();
+    for r in runs.iter().filter(|r| r.text("validation") != "FAILED") {
+        let e = configs.entry(r.config_id()).or_insert((r.text("repetition_rule"), 0, f64::NAN));
+        e.1 += 1;
+        e.2 = r.num("interval_width");
+    }
+    let rules: BTreeSet<&str> = configs.values().map(|c| c.0).filter(|rule| rule.starts_with("auto ")).collect();
+    for rule in rules {
+        // `auto MIN..MAX width W METRIC`
+        let words: Vec<&str> = rule.split(' ').collect();
+        let (Some(max), Some(target)) = (
+            words.get(1).and_then(|r| r.split("..").nth(1)).and_then(|m| m.parse::<u32>().ok()),
+            words.get(3).and_then(|w| w.parse::<f64>().ok()),
+        ) else {
+            continue;
+        };
+        let metric = words.get(4).copied().unwrap_or("?");
+        let of_rule: Vec<&(&str, u32, f64)> = configs.values().filter(|c| c.0 == rule).collect();
+        let narrow = of_rule.iter().filter(|c| c.2 <= target).count();
+        let at_max = of_rule.iter().filter(|c| c.2 > target && c.1 >= max).count();
+        let counts: Vec<f64> = of_rule.iter().map(|c| c.1 as f64).collect();
+        let widest = of_rule.iter().map(|c| c.2).filter(|w| w.is_finite()).fold(0.0, f64::max);
+        let _ = writeln!(
+            md,
+            "- Repetitions: `{rule}`: each configuration timed until the 95% interval of its median {metric} was at \
+             most {:.1}% of the median wide (at least {} and at most {max} times); {narrow} of {} configurations got \
+             there, {at_max} stopped at {max} (widest final interval {:.1}%); repetitions per configuration: median {}, \
+             total {}",
+            target * 100.0,
+            words.get(1).and_then(|r| r.split("..").next()).unwrap_or("?"),
+            of_rule.len(),
+            widest * 100.0,
+            stats::median(&counts),
+            counts.iter().sum::<f64>()
         );
     }
 }

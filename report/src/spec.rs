@@ -32,11 +32,16 @@ pub struct ReportSpec {
 impl ReportSpec {
     /// The metric the speedup of a run's configuration is a ratio of (see [`ReportSpec::speedup_metric`]).
     pub fn speedup_metric_of(&self, workload: &str) -> &str {
-        match &self.speedup_metric {
-            Some(metric) => metric,
-            None if workload == schema::Named::name(schema::Workload::Render) => "total_s",
-            None => "trace_s",
-        }
+        speedup_metric(self.speedup_metric.as_deref(), workload)
+    }
+}
+
+/// The metric speedups are ratios of: the configured one, else `total_s` for renders and `trace_s` for ray sets.
+pub fn speedup_metric<'a>(configured: Option<&'a str>, workload: &str) -> &'a str {
+    match configured {
+        Some(metric) => metric,
+        None if workload == schema::Named::name(schema::Workload::Render) => "total_s",
+        None => "trace_s",
     }
 }
 

@@ -21,19 +21,7 @@ const STATS: [&str; 7] = ["mean", "median", "std", "min", "max", "median_lo", "m
 
 /// One row per configuration (first-appearance order) with the columns described in the crate docs.
 pub fn summarise(rows: &Rows, spec: &ReportSpec) -> PolarsResult<DataFrame> {
-    let mut aggs: Vec<Expr> = ["experiment", "series"].iter().chain(SETTINGS.iter()).map(|c| col(*c).first()).collect();
-    aggs.push(len().cast(DataType::Int64).alias("n"));
-    for metric in METRICS {
-        aggs.push(col(metric).mean().alias(format!("{metric}_mean")));
-        aggs.push(col(metric).median().alias(format!("{metric}_median")));
-        aggs.push(col(metric).std(1).fill_null(lit(0.0)).alias(format!("{metric}_std")));
-        aggs.push(col(metric).min().alias(format!("{metric}_min")));
-        aggs.push(col(metric).max().alias(format!("{metric}_max")));
-    }
-    aggs.extend(deterministic().into_iter().map(|c| col(c).first()));
-    // One row per configuration and machine: timings of different machines are never pooled.
-    let keys = [col("config_id"), col("machine_id")];
-    let mut frame = rows.frame.clone().lazy().group_by_stable(keys).agg(aggs).collect()?;
+    let mut frame = aggregate(&rows.frame)?;
 
     let text = |name: &str| -> PolarsResult<Vec<String>> {
         Ok(frame.column(name)?.str()?.iter().map(|v| v.unwrap_or("").to_string()).collect())
@@ -77,10 +65,49 @@ pub fn summarise(rows: &Rows, spec: &ReportSpec) -> PolarsResult<DataFrame> {
     frame.select(column_order())
 }
 
+/// Per configuration and machine (timings of different machines are never pooled), in first-appearance order:
+/// the settings and counters of the first row, the row count `n`, and per metric its mean, median, sample
+/// standard deviation (0 for one row), minimum and maximum.
+///
+/// polars' eager group-by: its lazy engine would bring its streaming engine and cloud I/O (tokio, object_store,
+/// rustls, ...) into the build, about 90 s of compile on 2 cores for the same numbers (README, "Build time").
+#[allow(deprecated)] // the eager aggregates are deprecated in favour of the lazy ones
+fn aggregate(rows: &DataFrame) -> PolarsResult<DataFrame> {
+    let groups = rows.group_by_stable(["config_id", "machine_id"])?;
+    let firsts: Vec<&str> =
+        ["experiment", "series"].into_iter().chain(SETTINGS.iter().copied()).chain(deterministic()).collect();
+    let mut frame = groups.clone().select(firsts.clone()).first()?;
+    for name in firsts {
+        frame.rename(&format!("{name}_first"), name.into())?;
+    }
+    let count = groups.clone().select(["series"]).count()?;
+    frame.with_column(count.column("series_count")?.cast(&DataType::Int64)?.with_name("n".into()))?;
+    for metric in METRICS {
+        let stats: [(&str, DataFrame, String); 5] = [
+            ("mean", groups.clone().select([metric]).mean()?, format!("{metric}_mean")),
+            ("median", groups.clone().select([metric]).median()?, format!("{metric}_median")),
+            ("std", groups.clone().select([metric]).std(1)?, format!("{metric}_agg_std")),
+            ("min", groups.clone().select([metric]).min()?, format!("{metric}_min")),
+            ("max", groups.clone().select([metric]).max()?, format!("{metric}_max")),
+        ];
+        for (stat, aggregated, name) in stats {
+            let mut column = aggregated.column(&name)?.clone().with_name(format!("{metric}_{stat}").into());
+            if stat == "std" {
+                column = column.fill_null(FillNullStrategy::Zero)?;
+            }
+            frame.with_column(column)?;
+        }
+    }
+    Ok(frame)
+}
+
 /// The summary's columns in output order.
 fn column_order() -> Vec<String> {
-    let mut names: Vec<String> =
-        ["config_id", "machine_id", "experiment", "series"].iter().chain(SETTINGS.iter()).map(|c| c.to_string()).collect();
+    let mut names: Vec<String> = ["config_id", "machine_id", "experiment", "series"]
+        .iter()
+        .chain(SETTINGS.iter())
+        .map(|c| c.to_string())
+        .collect();
     names.push("n".into());
     for metric in METRICS {
         names.extend(STATS.iter().map(|stat| format!("{metric}_{stat}")));

@@ -181,6 +181,12 @@ declare_columns! {
         /// The SIMD kernel that ran: `simd_kernel` with `auto` resolved on the machine (`scalar`, `avx2`, `avx512`);
         /// `-` for structures without SIMD kernels.
         simd_kernel_used: String, Provenance = "-".to_string(), added 2;
+        /// How many repetitions the configuration got: `fixed N`, or `auto MIN..MAX width W METRIC` (timed until the
+        /// 95% interval of the median of METRIC was at most W of the median wide, at least MIN and at most MAX times).
+        repetition_rule: String, Provenance = "-".to_string(), added 4;
+        /// Relative width (hi - lo) / median of the 95% bootstrap interval of the configuration's median of the
+        /// metric in `repetition_rule`, over its repetitions up to this one (empty for the first).
+        interval_width: Option<f64>, Metric, decimals 6, added 4;
     }
 }
 

@@ -44,10 +44,56 @@ pub struct Exclude {
     pub axes: AxisValues,
 }
 
+/// How many timed repetitions each configuration gets.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Repetitions {
+    /// Exactly this many (`repetitions = N`).
+    Fixed(u32),
+    /// `repetitions = "auto"`: at least `min` and at most `max`; a configuration stops as soon as the 95% interval
+    /// of its median (of the speedup metric) is at most `target_width` of the median wide.
+    Auto { min: u32, max: u32, target_width: f64 },
+}
+
+impl Repetitions {
+    /// Default `min_repetitions` of `"auto"`.
+    pub const AUTO_MIN: u32 = 3;
+    /// Default `max_repetitions` of `"auto"`.
+    pub const AUTO_MAX: u32 = 10;
+    /// Default `target_ci_width` of `"auto"`.
+    pub const AUTO_TARGET_WIDTH: f64 = 0.03;
+
+    /// The most repetitions a configuration can get (what the plan lays out).
+    pub fn max(self) -> u32 {
+        match self {
+            Repetitions::Fixed(n) => n,
+            Repetitions::Auto { max, .. } => max,
+        }
+    }
+
+    /// The fewest repetitions a configuration gets.
+    pub fn min(self) -> u32 {
+        match self {
+            Repetitions::Fixed(n) => n,
+            Repetitions::Auto { min, .. } => min,
+        }
+    }
+
+    /// The rule as rows record it (`repetition_rule`): `fixed 5`, or `auto 3..10 ±3% total_s` with the metric
+    /// whose median's interval decides.
+    pub fn rule(self, metric: &str) -> String {
+        match self {
+            Repetitions::Fixed(n) => format!("fixed {n}"),
+            Repetitions::Auto { min, max, target_width } => {
+                format!("auto {min}..{max} width {} {metric}", target_width)
+            }
+        }
+    }
+}
+
 /// The `[quick]` overrides: repetitions, warm-ups and sweep axes.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Quick {
-    pub repetitions: Option<u32>,
+    pub repetitions: Option<Repetitions>,
     pub warmups: Option<u32>,
     pub sweep: AxisValues,
 }
@@ -64,7 +110,7 @@ pub struct Experiment {
     pub reference: Option<String>,
     /// The metric speedups are ratios of (`None`: `trace_s` for ray sets, `total_s` for renders).
     pub speedup_metric: Option<String>,
-    pub repetitions: u32,
+    pub repetitions: Repetitions,
     pub warmups: u32,
     pub order: RunOrder,
     pub order_seed: u64,
@@ -84,6 +130,9 @@ const TOP_KEYS: &[&str] = &[
     "reference",
     "speedup_metric",
     "repetitions",
+    "min_repetitions",
+    "max_repetitions",
+    "target_ci_width",
     "warmups",
     "order",
     "order_seed",
@@ -204,7 +253,7 @@ impl Experiment {
             text: text.to_string(),
             description: top.string("description")?.unwrap_or("").to_string(),
             speedup_metric: top.string("speedup_metric")?.map(|_| metric(&top, "speedup_metric")).transpose()?,
-            repetitions: top.integer("repetitions", 1, 1000)?.unwrap_or(1) as u32,
+            repetitions: parse_repetitions(&top)?.unwrap_or(Repetitions::Fixed(1)),
             warmups: top.integer("warmups", 0, 100)?.unwrap_or(0) as u32,
             order: parse_order(&top)?,
             order_seed: top.integer("order_seed", 0, i64::MAX)?.unwrap_or(0) as u64,
@@ -302,10 +351,43 @@ fn parse_excludes(top: &Section<'_>, labels: &Labels) -> Result<Vec<Exclude>, Er
 fn parse_quick(top: &Section<'_>) -> Result<Option<Quick>, Error> {
     let Some(q) = top.section("quick")? else { return Ok(None) };
     Ok(Some(Quick {
-        repetitions: q.integer("repetitions", 1, 1000)?.map(|v| v as u32),
+        repetitions: parse_repetitions(&q)?,
         warmups: q.integer("warmups", 0, 100)?.map(|v| v as u32),
-        sweep: axis_values(&q, &["repetitions", "warmups"])?,
+        sweep: axis_values(&q, &REPETITION_KEYS)?,
     }))
+}
+
+/// The keys that say how many repetitions run (top level and `[quick]`), and `warmups`.
+const REPETITION_KEYS: [&str; 5] = ["repetitions", "min_repetitions", "max_repetitions", "target_ci_width", "warmups"];
+
+/// `repetitions` (an integer, or `"auto"` with `min_repetitions`, `max_repetitions` and `target_ci_width`);
+/// `None` when the section does not set it.
+fn parse_repetitions(s: &Section<'_>) -> Result<Option<Repetitions>, Error> {
+    let auto_keys = ["min_repetitions", "max_repetitions", "target_ci_width"];
+    let auto = match s.get("repetitions") {
+        None | Some(toml::Value::Integer(_)) => false,
+        Some(toml::Value::String(v)) if v == "auto" => true,
+        Some(v) => {
+            let found = match v.as_str() {
+                Some(text) => format!("{text:?}"),
+                None => format!("a {}", v.type_str()),
+            };
+            return Err(s.error("repetitions", format!("expected an integer in 1..=1000 or \"auto\", found {found}")));
+        }
+    };
+    if !auto {
+        if let Some(key) = auto_keys.iter().find(|k| s.get(k).is_some()) {
+            return Err(s.error(key, "applies only with repetitions = \"auto\" (allowed there: min_repetitions, max_repetitions, target_ci_width)"));
+        }
+        return Ok(s.integer("repetitions", 1, 1000)?.map(|n| Repetitions::Fixed(n as u32)));
+    }
+    let min = s.integer("min_repetitions", 2, 1000)?.map_or(Repetitions::AUTO_MIN, |v| v as u32);
+    let max = s.integer("max_repetitions", 2, 1000)?.map_or(Repetitions::AUTO_MAX.max(min), |v| v as u32);
+    if max < min {
+        return Err(s.error("max_repetitions", format!("{max} is below min_repetitions {min} (allowed: {min}..=1000)")));
+    }
+    let target_width = s.number("target_ci_width", 0.0001, 1.0)?.unwrap_or(Repetitions::AUTO_TARGET_WIDTH);
+    Ok(Some(Repetitions::Auto { min, max, target_width }))
 }
 
 /// A metric key (`y` of a plot, `metric` of a claim), `total_s` when absent.
@@ -431,9 +513,14 @@ mod tests {
                 assert!(!fixed.iter().any(|c| c == column), "{label} does not fix {column}: {fixed:?}");
             }
         };
-        fixes("ours", "accel,traversal,obvhs_build,embree_build,embree_isa", "split,leaf_size,sah_bins,strategy,threads,objects");
+        fixes(
+            "ours",
+            "accel,traversal,obvhs_build,embree_build,embree_isa",
+            "split,leaf_size,sah_bins,strategy,threads,objects",
+        );
         fixes("o", "accel,split,leaf_size,sah_bins,traversal,embree_build,embree_isa", "obvhs_build,strategy,threads");
-        let serial_list = "accel,split,leaf_size,sah_bins,traversal,strategy,threads,obvhs_build,embree_build,embree_isa";
+        let serial_list =
+            "accel,split,leaf_size,sah_bins,traversal,strategy,threads,obvhs_build,embree_build,embree_isa";
         fixes("s", serial_list, "objects,seed");
     }
 

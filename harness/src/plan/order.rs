@@ -7,7 +7,7 @@ use crate::config::{Experiment, RunOrder};
 
 /// The runs of `configs` configurations in the experiment's order.
 pub fn runs(exp: &Experiment, configs: usize) -> Vec<PlannedRun> {
-    let (reps, warm) = (exp.repetitions, exp.warmups);
+    let (reps, warm) = (exp.repetitions.max(), exp.warmups);
     let round = |repetition: Option<u32>| (0..configs).map(move |config| PlannedRun { config, repetition });
     match exp.order {
         RunOrder::Sequential => (0..configs)

@@ -7,7 +7,6 @@
 
 pub mod diff;
 
-use std::collections::HashSet;
 use std::fs::{File, OpenOptions};
 use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::Path;
@@ -29,9 +28,9 @@ impl RowLog {
         Ok(Self { file })
     }
 
-    /// Opens an existing log for appending: drops a partial last line, checks the header, and returns the
-    /// `(config_id, repetition)` pairs already recorded.
-    pub fn resume(path: &Path) -> io::Result<(Self, HashSet<(String, u32)>)> {
+    /// Opens an existing log for appending: drops a partial last line, checks the header, and returns the rows
+    /// already recorded.
+    pub fn resume(path: &Path) -> io::Result<(Self, Vec<Row>)> {
         let mut file = OpenOptions::new().read(true).write(true).open(path)?;
         let mut text = String::new();
         file.read_to_string(&mut text)?;
@@ -45,8 +44,7 @@ impl RowLog {
         }
         let rows =
             read_rows(&text[..complete]).map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))?;
-        let done = rows.into_iter().map(|r| (r.config_id, r.repetition)).collect();
-        Ok((Self { file }, done))
+        Ok((Self { file }, rows))
     }
 
     /// Appends one row as a single write, then flushes.
@@ -75,7 +73,8 @@ mod tests {
         f.write_all(b"exp,def,series,0,random-sph").unwrap(); // killed mid-line
         drop(f);
         let (mut log, done) = RowLog::resume(&path).unwrap();
-        assert_eq!(done, HashSet::from([("abc".to_string(), 2)]));
+        let done: Vec<(&str, u32)> = done.iter().map(|r| (r.config_id.as_str(), r.repetition)).collect();
+        assert_eq!(done, [("abc", 2)]);
         row.config_id = "def".into();
         log.append(&row).unwrap();
         let text = std::fs::read_to_string(&path).unwrap();

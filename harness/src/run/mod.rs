@@ -1,6 +1,7 @@
 //! Runs a plan: every planned run timed, its counters from a separate counted pass (once per
 //! configuration), one row appended and flushed per timed repetition, then the report rebuilt.
 
+mod adaptive;
 pub mod arbitrate;
 mod backend;
 pub mod measure;
@@ -20,6 +21,7 @@ use crate::error::Error;
 use crate::output::Progress;
 use crate::plan::{Configuration, Plan};
 use crate::rows::RowLog;
+use adaptive::Sampler;
 use backend::Setup;
 use measure::Timing;
 use provenance::{Provenance, load_average_1m, timestamp_now};
@@ -37,8 +39,8 @@ pub fn default_dir(exp: &Experiment, quick: bool) -> std::path::PathBuf {
 }
 
 /// Opens the row log in `dir`: continues it with `resume` (if it exists and was made by the same config
-/// text), else starts it over. Returns the runs already recorded.
-fn open_log(exp: &Experiment, dir: &Path, resume: bool) -> Result<(RowLog, HashSet<(String, u32)>), Error> {
+/// text), else starts it over. Returns the rows already recorded.
+fn open_log(exp: &Experiment, dir: &Path, resume: bool) -> Result<(RowLog, Vec<Row>), Error> {
     let runs = dir.join(RUNS_CSV);
     let copy = dir.join(CONFIG_COPY);
     let io = |what: &str, p: &Path, e: std::io::Error| Error::Input(format!("{}: cannot {what}: {e}", p.display()));
@@ -55,7 +57,7 @@ fn open_log(exp: &Experiment, dir: &Path, resume: bool) -> Result<(RowLog, HashS
     }
     std::fs::create_dir_all(dir).map_err(|e| io("create", dir, e))?;
     std::fs::write(&copy, &exp.text).map_err(|e| io("write", &copy, e))?;
-    Ok((RowLog::create(&runs).map_err(|e| io("create", &runs, e))?, HashSet::new()))
+    Ok((RowLog::create(&runs).map_err(|e| io("create", &runs, e))?, Vec::new()))
 }
 
 fn describe(c: &Configuration) -> String {
@@ -195,41 +197,67 @@ fn row(
 
 /// Runs every planned run not yet recorded in `dir`, appending rows as they finish. Each configuration is
 /// validated (and counted) once before its first timed run; one that disagrees with the reference is
-/// recorded once with `validation = FAILED` and no timings, and never timed.
+/// recorded once with `validation = FAILED` and no timings, and never timed. With `repetitions = "auto"` a
+/// configuration's remaining repetitions are skipped once its median is known well enough ([`adaptive`]).
 pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<(), Error> {
     let provenance = Provenance::collect();
-    let (mut log, done) = open_log(exp, dir, resume)?;
-    let is_done = |config: usize, rep: u32| done.contains(&(plan.configurations[config].id.clone(), rep));
-    let reps = exp.repetitions;
+    let (mut log, recorded) = open_log(exp, dir, resume)?;
+    let metric_of = |c: &Configuration| {
+        report::spec::speedup_metric(exp.speedup_metric.as_deref(), schema::Named::name(c.settings.workload))
+    };
+    let rule_of = |c: &Configuration| exp.repetitions.rule(metric_of(c));
+    // Recorded rows count as repetitions done (and, with "auto", as samples of their configuration).
+    let mut sampler = Sampler::new(exp.repetitions);
+    let mut failed: HashSet<usize> = HashSet::new();
+    let mut done: HashSet<(usize, u32)> = HashSet::new();
+    let index: HashMap<&str, usize> = plan.configurations.iter().enumerate().map(|(i, c)| (c.id.as_str(), i)).collect();
+    let mut resumed: Vec<(usize, &Row)> =
+        recorded.iter().filter_map(|r| index.get(r.config_id.as_str()).map(|&i| (i, r))).collect();
+    resumed.sort_by_key(|(i, r)| (*i, r.repetition));
+    for (i, r) in resumed {
+        if r.validation == "FAILED" {
+            failed.insert(i);
+        } else if done.insert((i, r.repetition)) {
+            let c = &plan.configurations[i];
+            sampler.record(i, &c.id, adaptive::recorded_value(r, metric_of(c)));
+        }
+    }
     let todo: Vec<_> = plan
         .runs
         .iter()
-        .filter(|r| match r.repetition {
-            Some(rep) => !is_done(r.config, rep),
-            None => !(0..reps).all(|rep| is_done(r.config, rep)),
-        })
+        .filter(|r| !failed.contains(&r.config) && !sampler.is_done(r.config))
+        .filter(|r| r.repetition.is_none_or(|rep| !done.contains(&(r.config, rep))))
+        .filter(|r| r.repetition.is_some() || sampler.count(r.config) == 0)
         .collect();
-    if !done.is_empty() {
-        eprintln!("resuming {}: {} rows already recorded, {} runs to go", dir.display(), done.len(), todo.len());
+    if !recorded.is_empty() {
+        eprintln!(
+            "resuming {}: {} rows already recorded, at most {} runs to go",
+            dir.display(),
+            recorded.len(),
+            todo.len()
+        );
     }
-    let mut progress = Progress::new(todo.len());
     // Every configuration is timed in one process with one setup (its warm-ups first, then every repetition):
     // Embree in a worker process of its own, kept while its runs interleave with others'; the rest here.
-    let mut runs_left: HashMap<usize, usize> = HashMap::new();
+    let mut pending: HashMap<usize, Pending> = HashMap::new();
     for run in &todo {
-        *runs_left.entry(run.config).or_default() += 1;
+        let p = pending.entry(run.config).or_default();
+        if run.repetition.is_some() { p.repetitions += 1 } else { p.warmups += 1 }
     }
+    let cores = crate::render::available_threads();
+    let model = plan.configurations.iter().map(|c| crate::plan::estimate_seconds(&c.settings, cores)).collect();
+    let mut progress = Progress::new(model);
+    progress.update(|config| pending.get(&config).map_or(0.0, |p| p.expected(&sampler, config)));
     let mut workers: HashMap<usize, Worker> = HashMap::new();
     let mut setups: HashMap<usize, Setup> = HashMap::new();
     let mut bank = RayBank::default();
     let mut checked: HashMap<usize, Checked> = HashMap::new();
-    let mut failed: HashSet<usize> = HashSet::new();
     for run in todo {
         let c = &plan.configurations[run.config];
-        if failed.contains(&run.config) {
-            progress.finished(&format!("{} skipped: failed validation", describe(c)));
+        if failed.contains(&run.config) || sampler.is_done(run.config) {
             continue;
         }
+        let started = std::time::Instant::now();
         if !checked.contains_key(&run.config) {
             let v = check(plan, c, &mut bank)?;
             if v.mismatches > 0 {
@@ -248,10 +276,19 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<
                     }
                 );
                 let untimed = Timing::untimed(v.output_hash);
-                log.append(&row(exp, c, 0, &untimed, &v, &provenance, load_average_1m(), timestamp_now(), plan.shard))
+                let mut failed_row =
+                    row(exp, c, 0, &untimed, &v, &provenance, load_average_1m(), timestamp_now(), plan.shard);
+                failed_row.repetition_rule = rule_of(c);
+                log.append(&failed_row)
                     .map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))?;
                 failed.insert(run.config);
-                progress.finished(&format!("{} FAILED validation", describe(c)));
+                pending.remove(&run.config);
+                progress.finished(
+                    run.config,
+                    started.elapsed().as_secs_f64(),
+                    &format!("{} FAILED validation", describe(c)),
+                );
+                progress.update(|config| pending.get(&config).map_or(0.0, |p| p.expected(&sampler, config)));
                 continue;
             }
             checked.insert(run.config, v);
@@ -272,32 +309,62 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<
             let rays = workload_rays(plan, &c.settings, &mut bank);
             measure::timed(&c.settings, plan.scene_file(), rays.as_deref(), &setups[&run.config])?
         };
+        let p = pending.get_mut(&run.config).expect("counted for every run to do");
+        if run.repetition.is_some() {
+            p.repetitions -= 1
+        } else {
+            p.warmups -= 1
+        }
+        let what = match run.repetition {
+            None => format!("{} warm-up", describe(c)),
+            Some(rep) => {
+                let v = &checked[&run.config];
+                let hash = v.output_hash;
+                if hash != timing.output_hash {
+                    return Err(Error::Run(format!(
+                        "{}: the counted pass produced output {hash:016x} but the timed pass {:016x}: the tracer is not deterministic",
+                        describe(c),
+                        timing.output_hash
+                    )));
+                }
+                let mut recorded = row(exp, c, rep, &timing, v, &provenance, load, ts, plan.shard);
+                recorded.repetition_rule = rule_of(c);
+                recorded.interval_width =
+                    sampler.record(run.config, &c.id, adaptive::timed_value(&timing, metric_of(c))).map(|w| {
+                        let rounded = schema::Row { interval_width: Some(w), ..Default::default() }.rounded();
+                        rounded.interval_width.unwrap_or(w)
+                    });
+                log.append(&recorded)
+                    .map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))?;
+                let width = recorded.interval_width.map_or(String::new(), |w| format!(" (interval ±{:.1}%)", w * 50.0));
+                format!("{} rep {rep}: {:.3} s{width}", describe(c), timing.total_s())
+            }
+        };
         // After a configuration's last run its worker process, pool and device go.
-        let left = runs_left.get_mut(&run.config).expect("counted for every run to do");
-        *left -= 1;
-        if *left == 0 {
+        if p.warmups + p.repetitions == 0 || sampler.is_done(run.config) {
+            pending.remove(&run.config);
             workers.remove(&run.config);
             setups.remove(&run.config);
         }
-        let Some(rep) = run.repetition else {
-            progress.finished(&format!("{} warm-up", describe(c)));
-            continue;
-        };
-        let v = &checked[&run.config];
-        let hash = v.output_hash;
-        if hash != timing.output_hash {
-            return Err(Error::Run(format!(
-                "{}: the counted pass produced output {hash:016x} but the timed pass {:016x}: the tracer is not deterministic",
-                describe(c),
-                timing.output_hash
-            )));
-        }
-        log.append(&row(exp, c, rep, &timing, v, &provenance, load, ts, plan.shard))
-            .map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))?;
-        progress.finished(&format!("{} rep {rep}: {:.3} s", describe(c), timing.total_s()));
+        progress.finished(run.config, started.elapsed().as_secs_f64(), &what);
+        progress.update(|config| pending.get(&config).map_or(0.0, |p| p.expected(&sampler, config)));
     }
     progress.finish();
     Ok(())
+}
+
+/// The runs of one configuration still in the plan.
+#[derive(Clone, Copy, Debug, Default)]
+struct Pending {
+    warmups: usize,
+    repetitions: usize,
+}
+
+impl Pending {
+    /// Runs still expected: the warm-ups, and the repetitions the sampler expects (at most those planned).
+    fn expected(&self, sampler: &Sampler, config: usize) -> f64 {
+        self.warmups as f64 + sampler.expected_left(config).min(self.repetitions as f64)
+    }
 }
 
 #[cfg(test)]
@@ -319,8 +386,17 @@ mod tests {
             wrong_side: "backend",
             rays: 786_432,
         };
-        let row =
-            row(&exp, &plan.configurations[0], 0, &Timing::untimed(1), &v, &Provenance::collect(), 0.5, "t".into(), None);
+        let row = row(
+            &exp,
+            &plan.configurations[0],
+            0,
+            &Timing::untimed(1),
+            &v,
+            &Provenance::collect(),
+            0.5,
+            "t".into(),
+            None,
+        );
         assert_eq!((row.validation.as_str(), row.mismatches), ("FAILED", 3));
         assert_eq!((row.grazing, row.reference_checked, row.wrong_side.as_str()), (2, 16_384, "backend"));
         let text = format!("{}\n{}", schema::row::header(), schema::row::csv_line(&row).unwrap());
