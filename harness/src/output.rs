@@ -18,6 +18,8 @@ pub struct Progress {
     model: Vec<f64>,
     /// Wall seconds and count of each configuration's finished runs.
     measured: Vec<(f64, u32)>,
+    /// Wall seconds of each configuration's validation (its counted pass, once, before its first run).
+    validation: Vec<Option<f64>>,
     started: Instant,
     done: usize,
     /// Runs still expected, and their expected seconds.
@@ -52,6 +54,7 @@ impl Progress {
         let measured = vec![(0.0, 0); model.len()];
         Self {
             bar,
+            validation: vec![None; model.len()],
             model,
             measured,
             started: Instant::now(),
@@ -82,15 +85,34 @@ impl Progress {
         }
     }
 
-    /// Sets what is left: `runs(config)` further runs expected of each configuration.
+    /// Validation over a run, as measured so far (1 before any configuration has both).
+    fn validation_ratio(&self) -> f64 {
+        let (mut validation, mut run) = (0.0, 0.0);
+        for (v, &(seconds, n)) in self.validation.iter().zip(&self.measured) {
+            if let (Some(v), true) = (v, n > 0) {
+                validation += v;
+                run += seconds / n as f64;
+            }
+        }
+        if run > 0.0 { validation / run } else { 1.0 }
+    }
+
+    /// Records that `config` was validated in `seconds` (before its first run).
+    pub fn validated(&mut self, config: usize, seconds: f64) {
+        self.validation[config] = Some(seconds);
+    }
+
+    /// Sets what is left: `runs(config)` further runs expected of each configuration (a configuration not yet
+    /// validated also costs its validation, estimated from those so far).
     pub fn update(&mut self, runs: impl Fn(usize) -> f64) {
-        let scale = self.model_scale();
+        let (scale, validation) = (self.model_scale(), self.validation_ratio());
         let (mut count, mut seconds) = (0.0, 0.0);
         for config in 0..self.model.len() {
             let r = runs(config);
             if r > 0.0 {
+                let run = self.run_seconds(config, scale);
                 count += r;
-                seconds += r * self.run_seconds(config, scale);
+                seconds += r * run + if self.validation[config].is_none() { validation * run } else { 0.0 };
             }
         }
         let first = self.done == 0 && self.last_line.is_none();
@@ -110,9 +132,18 @@ impl Progress {
 
     /// Marks one run of `config` finished, after `seconds` of wall time; `what` describes it.
     pub fn finished(&mut self, config: usize, seconds: f64, what: &str) {
-        self.done += 1;
         let m = &mut self.measured[config];
         *m = (m.0 + seconds, m.1 + 1);
+        self.show(seconds, what);
+    }
+
+    /// Marks one planned run done without timing it (its configuration failed validation).
+    pub fn untimed(&mut self, what: &str) {
+        self.show(0.0, what);
+    }
+
+    fn show(&mut self, seconds: f64, what: &str) {
+        self.done += 1;
         match &self.bar {
             Some(bar) => {
                 bar.set_message(what.to_string());
@@ -159,10 +190,12 @@ mod tests {
     fn the_estimate_uses_the_model_until_a_configuration_ran_then_its_own_times() {
         let mut p = Progress { bar: None, ..Progress::new(vec![1.0, 2.0]) };
         p.update(|_| 3.0);
-        assert_eq!(p.seconds_left, 9.0, "model only: 3 x 1 s + 3 x 2 s");
+        assert_eq!(p.seconds_left, 12.0, "model only: 3 x 1 s + 3 x 2 s, and a validation of 1 run each");
+        p.validated(0, 1.0);
         p.finished(0, 0.5, "a");
         p.update(|c| if c == 0 { 2.0 } else { 3.0 });
-        // Configuration 0 ran at half the model's time: its own mean (0.5 s) and the model scaled by 0.5 for 1.
-        assert_eq!(p.seconds_left, 2.0 * 0.5 + 3.0 * 1.0);
+        // Configuration 0 ran at half the model's time: its own mean (0.5 s), and the model scaled by 0.5 for 1,
+        // whose validation takes twice a run as 0's did.
+        assert_eq!(p.seconds_left, 2.0 * 0.5 + 3.0 * 1.0 + 2.0 * 1.0);
     }
 }

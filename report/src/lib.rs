@@ -22,7 +22,8 @@ mod summary;
 use std::fs::File;
 use std::path::{Path, PathBuf};
 
-use polars::prelude::{CsvWriter, DataFrame, ParquetWriter, SerWriter};
+use polars_core::prelude::DataFrame;
+use polars_io::prelude::{CsvWriter, ParquetWriter, SerWriter};
 
 pub use claims::ClaimResult;
 pub use error::Error;

@@ -5,7 +5,7 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::sync::OnceLock;
 
-use polars::prelude::*;
+use polars_core::prelude::*;
 use schema::row::{COLUMNS, Kind};
 use schema::{Cell, Row};
 

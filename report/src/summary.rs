@@ -1,7 +1,7 @@
 //! Per-configuration summaries (`summary.csv`, `summary.parquet`): polars aggregates each
 //! configuration's repetitions; bootstrap intervals and speedups are added from the plain samples.
 
-use polars::prelude::*;
+use polars_core::prelude::*;
 
 use crate::pool;
 use crate::rows::{Rows, Run, SETTINGS};

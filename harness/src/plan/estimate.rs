@@ -12,7 +12,13 @@ pub fn estimate_seconds(s: &Settings, cores: usize) -> f64 {
         Workload::Render => pixels * 2.6,
     };
     let n = s.objects.max(1) as f64;
+    // Renders: shading and a shadow ray per hit; fitted to `paper` on the 2-core AVX2 dev machine (2026-11-23).
+    let render_ray = |accel: Accel| match accel {
+        Accel::Ours(AccelKind::List) => 7e-8 + 5.8e-9 * n,
+        _ => 7e-8 + 3.5e-8 * n.log2().max(1.0),
+    };
     let per_ray = match (s.accel, s.traversal) {
+        (accel, _) if s.workload == Workload::Render => render_ray(accel),
         (Accel::Peer(_), _) => 25e-9 * n.log2().max(1.0),
         (Accel::Ours(AccelKind::List), _) => 2.5e-9 * n,
         (Accel::Ours(AccelKind::WideBvh), _) | (_, Some(Traversal::FrontToBack)) => 25e-9 * n.log2().max(1.0),

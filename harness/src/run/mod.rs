@@ -257,9 +257,10 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<
         if failed.contains(&run.config) || sampler.is_done(run.config) {
             continue;
         }
-        let started = std::time::Instant::now();
         if !checked.contains_key(&run.config) {
+            let started = std::time::Instant::now();
             let v = check(plan, c, &mut bank)?;
+            progress.validated(run.config, started.elapsed().as_secs_f64());
             if v.mismatches > 0 {
                 eprintln!(
                     "VALIDATION FAILED: {}: {} of {} rays disagree with {} beyond f64 brute force's tolerance \
@@ -283,11 +284,7 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<
                     .map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))?;
                 failed.insert(run.config);
                 pending.remove(&run.config);
-                progress.finished(
-                    run.config,
-                    started.elapsed().as_secs_f64(),
-                    &format!("{} FAILED validation", describe(c)),
-                );
+                progress.untimed(&format!("{} FAILED validation", describe(c)));
                 progress.update(|config| pending.get(&config).map_or(0.0, |p| p.expected(&sampler, config)));
                 continue;
             }
@@ -295,6 +292,7 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<
         }
         let load = load_average_1m();
         let ts = timestamp_now();
+        let started = std::time::Instant::now();
         let timing = if c.settings.peer().is_some_and(PeerKind::needs_embree) {
             if !workers.contains_key(&run.config) {
                 let exe = std::env::current_exe()
