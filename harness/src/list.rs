@@ -46,5 +46,6 @@ pub fn run() {
         here.join(", ")
     );
     line("orders", &ChildOrdering::ALL);
+    println!("{:<12} {} (wide-bvh {}; ray sets only)", "packets", ints(&WideParams::PACKETS), Axis::packet_size.key());
     println!("{:<12} {} logical cores on this machine", "threads", crate::render::available_threads());
 }

@@ -66,7 +66,13 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
             traversal: args.traversal,
             ..BvhParams::default()
         },
-        wide: WideParams { width: args.node_width, leaf_block: args.leaf_block, kernel: args.simd_kernel, order: args.child_order },
+        wide: WideParams {
+            width: args.node_width,
+            leaf_block: args.leaf_block,
+            kernel: args.simd_kernel,
+            order: args.child_order,
+            ..WideParams::default()
+        },
     };
     let threads = args.threads.map_or_else(available_threads, |t| t as usize);
     let strategy = Strategy::new(args.strategy, threads);

@@ -8,7 +8,8 @@ use tracer::executor::{Strategy, StrategyKind};
 use tracer::scene::SceneKind;
 
 use crate::names::{
-    Accel, EmbreeIsa, EmbreeQuality, LeafBlock, NodeWidth, ObvhsQuality, PeerKind, SceneName, Threads, Workload,
+    Accel, EmbreeIsa, EmbreeQuality, LeafBlock, NodeWidth, ObvhsQuality, PacketSize, PeerKind, SceneName, Threads,
+    Workload,
 };
 
 declare_columns! {
@@ -76,6 +77,10 @@ declare_columns! {
         simd_kernel: Option<Kernel> = Some(WideParams::default().kernel), applies wide else None, added 2;
         /// Order in which the wide BVH visits a node's children: stored, nearest entry first, or by ray octant.
         child_order: Option<ChildOrdering> = Some(WideParams::default().order), applies wide else None, added 2;
+        /// Rays the wide BVH traces together in a ray set: 1 (one at a time), or packets of 8 or 16 with an active
+        /// mask (renders trace one ray at a time).
+        packet_size: Option<PacketSize> = Some(PacketSize(WideParams::default().packet)), applies wide_ray_set else None,
+            added 4, unit "rays";
     }
     measures {
         /// Wall time of the backend's one-time start-up in the process that times the configuration: thread pool,
@@ -216,6 +221,11 @@ fn wide(s: &Settings) -> bool {
     s.accel.is_wide()
 }
 
+/// Packets are for ray sets: renders trace one ray at a time.
+fn wide_ray_set(s: &Settings) -> bool {
+    s.accel.is_wide() && s.workload != Workload::Render
+}
+
 /// Only the binned SAH split has bins.
 fn binned_sah(s: &Settings) -> bool {
     tree(s) && s.split == Some(Split::BinnedSah)
@@ -270,6 +280,7 @@ impl Settings {
             leaf_block: self.leaf_block.map_or(wide_default.leaf_block, |b| b.0),
             kernel: self.simd_kernel.unwrap_or(wide_default.kernel),
             order: self.child_order.unwrap_or(wide_default.order),
+            packet: self.packet_size.map_or(wide_default.packet, |p| p.0),
         };
         AccelParams { kind, bvh, wide }
     }

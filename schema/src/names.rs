@@ -222,6 +222,11 @@ int_choice! {
     LeafBlock = WideParams::LEAF_BLOCKS
 }
 
+int_choice! {
+    /// Rays the wide BVH traces together in a batch (`WideParams::PACKETS`).
+    PacketSize = WideParams::PACKETS
+}
+
 /// Where a configuration's spheres come from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SceneName {

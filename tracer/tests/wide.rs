@@ -105,7 +105,7 @@ fn every_kernel_gives_the_same_hits_and_counts_on_the_same_tree() {
         for width in WideParams::WIDTHS {
             for leaf_block in WideParams::LEAF_BLOCKS {
                 for order in ChildOrdering::ALL {
-                    let wide = WideParams { width, leaf_block, order, kernel: Kernel::Scalar };
+                    let wide = WideParams { width, leaf_block, order, kernel: Kernel::Scalar, ..WideParams::default() };
                     let bvh = BvhParams { split: Split::BinnedSah, leaf_size: 8, ..BvhParams::default() };
                     let scalar = WideBvh::build(&scene.spheres, &bvh, &wide);
                     let want = trace(&scalar, &scene.rays);
@@ -130,7 +130,7 @@ fn same_seed_same_tree_and_counts_in_any_thread_count() {
     let rays = testing::sphere_ray_mix(&spheres, 3, 500);
     let bvh = BvhParams { split: Split::BinnedSah, leaf_size: 4, ..BvhParams::default() };
     let pool = |t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
-    for wide in [WideParams::default(), WideParams { width: 4, leaf_block: 16, kernel: Kernel::Scalar, order: ChildOrdering::Octant }] {
+    for wide in [WideParams::default(), WideParams { width: 4, leaf_block: 16, kernel: Kernel::Scalar, order: ChildOrdering::Octant, packet: 8 }] {
         let trees: Vec<WideBvh> = [1, 2, 1].map(|t| pool(t).install(|| WideBvh::build(&spheres, &bvh, &wide))).into();
         let counts = |t: &WideBvh| {
             let mut c = WorkCounters::default();
@@ -256,7 +256,7 @@ fn serialized_params_of_other_kinds_are_unchanged_and_wide_params_round_trip() {
     assert_eq!(serde_json::from_str::<AccelParams>(&text).unwrap(), flat);
     let wide = AccelParams {
         kind: AccelKind::WideBvh,
-        wide: WideParams { width: 4, leaf_block: 16, kernel: Kernel::Scalar, order: ChildOrdering::Octant },
+        wide: WideParams { width: 4, leaf_block: 16, kernel: Kernel::Scalar, order: ChildOrdering::Octant, packet: 1 },
         ..AccelParams::default()
     };
     let text = serde_json::to_string(&wide).unwrap();

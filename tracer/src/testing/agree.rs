@@ -3,6 +3,7 @@
 use crate::accel::{AccelVisitor, Accelerator, BuiltAccel, Hit, List};
 use crate::counters::NoCounters;
 use crate::geometry::{ExactTest, Ray, Sphere};
+use crate::render::PrimaryHits;
 
 use super::every_tree;
 
@@ -88,7 +89,8 @@ impl<'a> Reference<'a> {
     }
 
     /// Panics (listing the disagreements) unless `accel` answers every ray like brute force: closest hit and
-    /// occlusion, within `tol`.
+    /// occlusion, within `tol`, one ray at a time and as one batch (the path ray sets are traced and timed with:
+    /// packets, where the structure has them).
     #[track_caller]
     pub fn assert_agrees<A: Accelerator>(&self, what: &str, accel: &A, tol: Tolerance) {
         let mut comparison = self.compare(what, tol);
@@ -97,6 +99,16 @@ impl<'a> Reference<'a> {
             comparison.occluded(i, accel.occluded(ray, &mut NoCounters));
         }
         comparison.finish();
+        let mut batch = self.compare(&format!("{what} (batch)"), tol);
+        let mut hits = vec![PrimaryHits::MISS; self.rays.len()];
+        accel.intersect_batch(self.rays, &mut hits, &mut NoCounters);
+        let mut occluded = vec![false; self.rays.len()];
+        accel.occluded_batch(self.rays, &mut occluded, &mut NoCounters);
+        for (i, (hit, occluded)) in hits.into_iter().zip(occluded).enumerate() {
+            batch.closest(i, (hit.prim != PrimaryHits::MISS.prim).then_some(hit));
+            batch.occluded(i, occluded);
+        }
+        batch.finish();
     }
 
     /// [`Reference::assert_agrees`] for whichever structure `accel` holds.

@@ -42,17 +42,20 @@ pub fn every_tree() -> Vec<AccelParams> {
 
 /// Every wide BVH configuration this CPU can run: every kernel it has ([`Kernel::available`]: scalar, AVX2,
 /// AVX-512) × width × leaf block × child order. The binary tree each is collapsed from cycles through every split ×
-/// leaf sizes 1, 16, 4 and 8 (so leaves of one block, of several blocks and merged subtrees all occur).
+/// leaf sizes 1, 16, 4 and 8 (so leaves of one block, of several blocks and merged subtrees all occur), and the
+/// batch packet size through 1, 8 and 16 (so every kernel, width and block runs in packets of both sizes).
 pub fn every_wide() -> Vec<AccelParams> {
     let mut all = Vec::new();
     let mut binary = Split::ALL.into_iter().flat_map(|split| [1, 16, 4, 8].map(|leaf_size| (split, leaf_size))).cycle();
+    let mut packets = WideParams::PACKETS.into_iter().cycle();
     for kernel in Kernel::available() {
         for width in WideParams::WIDTHS {
             for leaf_block in WideParams::LEAF_BLOCKS {
                 for order in ChildOrdering::ALL {
                     let (split, leaf_size) = binary.next().expect("cycle");
                     let bvh = BvhParams { split, leaf_size, traversal: Traversal::FrontToBack, ..BvhParams::default() };
-                    let wide = WideParams { width, leaf_block, kernel, order };
+                    let packet = packets.next().expect("cycle");
+                    let wide = WideParams { width, leaf_block, kernel, order, packet };
                     all.push(AccelParams { kind: AccelKind::WideBvh, bvh, wide });
                 }
             }

@@ -15,6 +15,7 @@ pub mod kernel;
 pub mod leaf;
 pub mod node;
 pub mod order;
+pub mod packet;
 pub mod params;
 pub mod ray;
 pub mod traverse;
@@ -22,6 +23,7 @@ pub mod traverse;
 use collapse::{Tree, collapse};
 use kernel::Query;
 use order::{ByOctant, Nearest, Order, Stored};
+use packet::{AnyPackets, ClosestPackets};
 use traverse::{Any, AnyBatch, Closest, ClosestBatch};
 
 pub use params::{ChildOrdering, Kernel, WideParams};
@@ -152,6 +154,20 @@ impl WideBvh {
         }
     }
 
+    /// [`WideBvh::dispatch`] for packet queries, which order children by the packet's entry distances whatever
+    /// the child order (so they are compiled once, not once per order).
+    #[inline(always)]
+    fn dispatch_packets<Q: Query>(&self, query: Q) -> Q::Out {
+        match &self.layout {
+            Layout::W4B4(t) => self.run::<Q, Nearest, 4, 4>(t, query),
+            Layout::W4B8(t) => self.run::<Q, Nearest, 4, 8>(t, query),
+            Layout::W4B16(t) => self.run::<Q, Nearest, 4, 16>(t, query),
+            Layout::W8B4(t) => self.run::<Q, Nearest, 8, 4>(t, query),
+            Layout::W8B8(t) => self.run::<Q, Nearest, 8, 8>(t, query),
+            Layout::W8B16(t) => self.run::<Q, Nearest, 8, 16>(t, query),
+        }
+    }
+
     #[inline(always)]
     fn ordered<Q: Query, const W: usize, const B: usize>(&self, tree: &Tree<W, B>, query: Q) -> Q::Out {
         match self.params.order {
@@ -224,10 +240,18 @@ impl Accelerator for WideBvh {
     }
 
     fn intersect_batch<C: Counters>(&self, rays: &[Ray], out: &mut [Hit], counters: &mut C) {
-        self.dispatch(ClosestBatch { rays, out, counters })
+        match self.params.packet {
+            8 => self.dispatch_packets(ClosestPackets::<C, 8> { rays, out, counters }),
+            16 => self.dispatch_packets(ClosestPackets::<C, 16> { rays, out, counters }),
+            _ => self.dispatch(ClosestBatch { rays, out, counters }),
+        }
     }
 
     fn occluded_batch<C: Counters>(&self, rays: &[Ray], out: &mut [bool], counters: &mut C) {
-        self.dispatch(AnyBatch { rays, out, counters })
+        match self.params.packet {
+            8 => self.dispatch_packets(AnyPackets::<C, 8> { rays, out, counters }),
+            16 => self.dispatch_packets(AnyPackets::<C, 16> { rays, out, counters }),
+            _ => self.dispatch(AnyBatch { rays, out, counters }),
+        }
     }
 }

@@ -98,11 +98,15 @@ pub struct WideParams {
     pub kernel: Kernel,
     /// The child visiting order; see [`ChildOrdering`].
     pub order: ChildOrdering,
+    /// Rays a batch traces together, in [`WideParams::PACKETS`]: 1 traces them one by one, 8 or 16 in packets
+    /// with an active mask (see [`super::packet`]). Left out when serialized at 1.
+    #[serde(skip_serializing_if = "WideParams::is_single")]
+    pub packet: u32,
 }
 
 impl Default for WideParams {
     fn default() -> Self {
-        Self { width: 8, leaf_block: 8, kernel: Kernel::Auto, order: ChildOrdering::Distance }
+        Self { width: 8, leaf_block: 8, kernel: Kernel::Auto, order: ChildOrdering::Distance, packet: 1 }
     }
 }
 
@@ -111,6 +115,12 @@ impl WideParams {
     pub const WIDTHS: [u32; 2] = [4, 8];
     /// Allowed `leaf_block` values.
     pub const LEAF_BLOCKS: [u32; 3] = [4, 8, 16];
+    /// Allowed `packet` values.
+    pub const PACKETS: [u32; 3] = [1, 8, 16];
+
+    fn is_single(packet: &u32) -> bool {
+        *packet == 1
+    }
 
     /// True for the default parameters (serialized parameters of other structures leave them out).
     pub fn is_default(&self) -> bool {
@@ -126,6 +136,9 @@ impl WideParams {
         if !Self::LEAF_BLOCKS.contains(&self.leaf_block) {
             let found = self.leaf_block.to_string();
             return Err(ParamError { key: "leaf_block", allowed: list(&Self::LEAF_BLOCKS), found });
+        }
+        if !Self::PACKETS.contains(&self.packet) {
+            return Err(ParamError { key: "packet", allowed: list(&Self::PACKETS), found: self.packet.to_string() });
         }
         if !self.kernel.is_available() {
             let names = std::iter::once(Kernel::Auto).chain(Kernel::available()).map(Kernel::name).collect::<Vec<_>>();
@@ -146,6 +159,8 @@ mod tests {
         assert_eq!((e.key, e.allowed.as_str()), ("width", "4, 8"));
         let e = WideParams { leaf_block: 2, ..WideParams::default() }.validate().unwrap_err();
         assert_eq!((e.key, e.allowed.as_str()), ("leaf_block", "4, 8, 16"));
+        let e = WideParams { packet: 4, ..WideParams::default() }.validate().unwrap_err();
+        assert_eq!((e.key, e.allowed.as_str()), ("packet", "1, 8, 16"));
         assert!(WideParams::default().validate().is_ok());
     }
 
@@ -178,5 +193,9 @@ mod tests {
         let text = serde_json::to_string(&WideParams::default()).unwrap();
         assert_eq!(text, r#"{"width":8,"leaf_block":8,"kernel":"auto","order":"distance"}"#);
         assert!(serde_json::from_str::<WideParams>(r#"{"widht": 4}"#).is_err());
+        let packets = WideParams { packet: 16, ..WideParams::default() };
+        let text = serde_json::to_string(&packets).unwrap();
+        assert_eq!(text, r#"{"width":8,"leaf_block":8,"kernel":"auto","order":"distance","packet":16}"#);
+        assert_eq!(serde_json::from_str::<WideParams>(&text).unwrap(), packets);
     }
 }

@@ -1,0 +1,307 @@
+//! Packet traversal: `P` rays (8 or 16) go down the tree together, with an active mask.
+//!
+//! One shared stack holds entries of a child, the mask of the packet's rays that entered it and the nearest of
+//! their entry distances. A popped entry is taken by the rays of its mask whose closest hit so far lies beyond that
+//! distance (none: it is skipped). At a node each active ray box-tests the node's children with the kernel's
+//! node test (SIMD across the children); every child that some ray enters is pushed with the mask of those rays,
+//! nearest entry on top. At a leaf each active ray tests the leaf's blocks. Each ray's distances come from the
+//! same kernel calls as in single-ray traversal, so its answer is the single-ray answer; what the packet shares is
+//! the walk: one stack, one fetch of every node and block for all its rays. Any-hit packets drop a ray from the
+//! packet at its first hit and stop when none is left.
+//!
+//! Children are visited nearest-first by the packet's nearest entry distance, whatever the tree's
+//! [`super::ChildOrdering`] (an order for one ray direction does not fit a packet). So a ray may reach a far
+//! leaf before a near one, and then box-test the near one against a closest hit found there. A box's entry distance
+//! can round a hair above the distance of a sphere inside it (seen at coordinates ~1e13 in the degenerate-scene
+//! tests: a hit one ulp farther than the nearest was kept), so packets cull children and skip stack entries
+//! against `t_max` widened by [`CULL_SLACK`]; the sphere tests still take only strictly nearer hits.
+//!
+//! Counters count each ray's work: a `node_visit` and the node's `box_tests` for every active ray at a node, a
+//! `prim_test` per real sphere of a block for every active ray at a leaf.
+
+use std::mem::MaybeUninit;
+
+use super::collapse::Tree;
+use super::kernel::{Ops, Query};
+use super::leaf::PAD;
+use super::node::ChildRef;
+use super::order::Order;
+use super::ray::RayLanes;
+use crate::accel::Hit;
+use crate::accel::bvh::builder::MAX_DEPTH;
+use crate::counters::Counters;
+use crate::geometry::Ray;
+use crate::render::PrimaryHits;
+
+/// Relative slack on a ray's closest hit when culling boxes: far above the few ulps a box's entry distance can
+/// round past a sphere's hit distance, far below what would make a visit useless.
+const CULL_SLACK: f32 = 1.0 + 1.0 / 65536.0;
+
+/// Stack entries: as for one ray (see `traverse`), every level leaves at most `W - 1` entries.
+const STACK: usize = MAX_DEPTH * 8;
+
+/// A child waiting, the rays that entered it, and the nearest of their entry distances.
+#[derive(Clone, Copy)]
+struct Entry {
+    child: ChildRef,
+    rays: u32,
+    t: f32,
+}
+
+/// The packet's stack.
+struct Stack {
+    entries: [MaybeUninit<Entry>; STACK],
+    len: usize,
+}
+
+impl Stack {
+    #[inline(always)]
+    fn new() -> Self {
+        Self { entries: [const { MaybeUninit::uninit() }; STACK], len: 0 }
+    }
+
+    /// Inserts among the entries from `base` up, the largest distance lowest (the nearest ends on top).
+    #[inline(always)]
+    fn insert_sorted(&mut self, base: usize, e: Entry) {
+        assert!(self.len < STACK, "packet stack overflow");
+        let mut i = self.len;
+        // SAFETY: entries below `len` are written, and `i <= len < STACK`.
+        unsafe {
+            while i > base && self.entries.get_unchecked(i - 1).assume_init_ref().t <= e.t {
+                let below = self.entries.get_unchecked(i - 1).assume_init_read();
+                self.entries.get_unchecked_mut(i).write(below);
+                i -= 1;
+            }
+            self.entries.get_unchecked_mut(i).write(e);
+        }
+        self.len += 1;
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<Entry> {
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        // SAFETY: entries below the old `len` are written, and each is read once.
+        Some(unsafe { self.entries.get_unchecked(self.len).assume_init_read() })
+    }
+}
+
+/// The rays of a packet, prepared once.
+struct Packet<const P: usize> {
+    lanes: [RayLanes; P],
+    /// Closest hit so far (closest-hit packets) or the ray's own `t_max`.
+    t_max: [f32; P],
+    /// Hit sphere so far ([`PAD`]: none).
+    best: [u32; P],
+}
+
+impl<const P: usize> Packet<P> {
+    /// `rays.len()` rays (1..=P); lanes past them repeat the last ray and are never active.
+    #[inline(always)]
+    fn new(rays: &[Ray]) -> Self {
+        let last = rays.len() - 1;
+        Self {
+            lanes: std::array::from_fn(|i| RayLanes::new(&rays[i.min(last)])),
+            t_max: std::array::from_fn(|i| rays[i.min(last)].t_max),
+            best: [PAD; P],
+        }
+    }
+}
+
+/// Iterates the set bits of a mask.
+#[inline(always)]
+fn bits(mut mask: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let i = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            i
+        })
+    })
+}
+
+/// The rays of `mask` whose current `t_max` (with [`CULL_SLACK`]) lies beyond `t`.
+#[inline(always)]
+fn still_wanted<const P: usize>(mask: u32, t: f32, t_max: &[f32; P]) -> u32 {
+    bits(mask).filter(|&i| t < t_max[i] * CULL_SLACK).fold(0, |m, i| m | 1 << i)
+}
+
+/// Box-tests `node`'s children for the `active` rays and pushes every child entered, nearest on top.
+///
+/// # Safety
+/// The CPU supports `K`'s instructions; `node` is a node of `tree`.
+#[inline(always)]
+unsafe fn enter<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
+    tree: &Tree<W, B>,
+    node: ChildRef,
+    active: u32,
+    packet: &Packet<P>,
+    stack: &mut Stack,
+    counters: &mut C,
+) {
+    debug_assert!(node.index() < tree.nodes.len());
+    // SAFETY: node references come from the collapse, which emits every node it refers to.
+    let node = unsafe { tree.nodes.get_unchecked(node.index()) };
+    let mut entered = [0u32; W];
+    let mut nearest = [f32::INFINITY; W];
+    let mut dist = [0.0f32; W];
+    for i in bits(active) {
+        counters.node_visit();
+        if C::ENABLED {
+            counters.box_tests(node.len() as u32);
+        }
+        // SAFETY: forwarded from the caller.
+        let hits = unsafe { K::boxes(node, &packet.lanes[i], packet.t_max[i] * CULL_SLACK, &mut dist) };
+        for lane in bits(hits) {
+            entered[lane] |= 1 << i;
+            nearest[lane] = nearest[lane].min(dist[lane]);
+        }
+    }
+    let base = stack.len;
+    for lane in 0..W {
+        if entered[lane] != 0 {
+            stack.insert_sorted(base, Entry { child: node.children[lane], rays: entered[lane], t: nearest[lane] });
+        }
+    }
+}
+
+/// Nearest hits of up to `P` rays into `out`.
+///
+/// # Safety
+/// The CPU supports `K`'s instructions.
+#[inline(always)]
+unsafe fn closest<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
+    tree: &Tree<W, B>,
+    rays: &[Ray],
+    out: &mut [Hit],
+    counters: &mut C,
+) {
+    let mut packet = Packet::<P>::new(rays);
+    let mut stack = Stack::new();
+    stack.insert_sorted(0, Entry { child: ChildRef::ROOT, rays: (1u32 << rays.len()) - 1, t: f32::NEG_INFINITY });
+    while let Some(e) = stack.pop() {
+        let active = still_wanted(e.rays, e.t, &packet.t_max);
+        if active == 0 {
+            continue;
+        }
+        if e.child.is_node() {
+            // SAFETY: forwarded from the caller.
+            unsafe { enter::<K, C, W, B, P>(tree, e.child, active, &packet, &mut stack, counters) };
+            continue;
+        }
+        debug_assert!(e.child.blocks().end <= tree.blocks.len());
+        // SAFETY: leaf references name blocks the collapse emitted.
+        for block in unsafe { tree.blocks.get_unchecked(e.child.blocks()) } {
+            for i in bits(active) {
+                if C::ENABLED {
+                    (0..block.len()).for_each(|_| counters.prim_test());
+                }
+                // SAFETY: forwarded from the caller.
+                if let Some((t, lane)) = unsafe { K::closest(block, &packet.lanes[i], packet.t_max[i]) } {
+                    packet.t_max[i] = t;
+                    packet.best[i] = block.ids[lane];
+                }
+            }
+        }
+    }
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = match packet.best[i] {
+            PAD => PrimaryHits::MISS,
+            prim => Hit { t: packet.t_max[i], prim },
+        };
+    }
+}
+
+/// Occlusion of up to `P` rays into `out`.
+///
+/// # Safety
+/// The CPU supports `K`'s instructions.
+#[inline(always)]
+unsafe fn any<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
+    tree: &Tree<W, B>,
+    rays: &[Ray],
+    out: &mut [bool],
+    counters: &mut C,
+) {
+    let packet = Packet::<P>::new(rays);
+    let mut unoccluded: u32 = (1u32 << rays.len()) - 1;
+    let mut stack = Stack::new();
+    stack.insert_sorted(0, Entry { child: ChildRef::ROOT, rays: unoccluded, t: f32::NEG_INFINITY });
+    while let Some(e) = stack.pop() {
+        let active = e.rays & unoccluded;
+        if active == 0 {
+            continue;
+        }
+        if e.child.is_node() {
+            // SAFETY: forwarded from the caller.
+            unsafe { enter::<K, C, W, B, P>(tree, e.child, active, &packet, &mut stack, counters) };
+            continue;
+        }
+        // SAFETY: as in `closest`.
+        for block in unsafe { tree.blocks.get_unchecked(e.child.blocks()) } {
+            for i in bits(active & unoccluded) {
+                if C::ENABLED {
+                    (0..block.len()).for_each(|_| counters.prim_test());
+                }
+                // SAFETY: forwarded from the caller.
+                if unsafe { K::any(block, &packet.lanes[i], packet.t_max[i]) } {
+                    unoccluded &= !(1 << i);
+                }
+            }
+        }
+        if unoccluded == 0 {
+            break;
+        }
+    }
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = unoccluded >> i & 1 == 0;
+    }
+}
+
+/// Nearest hits of a batch in packets of `P` ([`PrimaryHits::MISS`] for misses), one `ray` count per ray.
+pub struct ClosestPackets<'a, C, const P: usize> {
+    /// The rays.
+    pub rays: &'a [Ray],
+    /// One answer per ray.
+    pub out: &'a mut [Hit],
+    /// Where their work is counted.
+    pub counters: &'a mut C,
+}
+
+/// Occlusion of a batch in packets of `P`, one `ray` count per ray.
+pub struct AnyPackets<'a, C, const P: usize> {
+    /// The rays.
+    pub rays: &'a [Ray],
+    /// One answer per ray.
+    pub out: &'a mut [bool],
+    /// Where their work is counted.
+    pub counters: &'a mut C,
+}
+
+impl<C: Counters, const P: usize> Query for ClosestPackets<'_, C, P> {
+    type Out = ();
+    #[inline(always)]
+    unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) {
+        const { assert!(P <= 32, "the active mask is a u32") };
+        for (rays, out) in self.rays.chunks(P).zip(self.out.chunks_mut(P)) {
+            (0..rays.len()).for_each(|_| self.counters.ray());
+            // SAFETY: forwarded from the caller.
+            unsafe { closest::<K, C, W, B, P>(tree, rays, out, self.counters) };
+        }
+    }
+}
+
+impl<C: Counters, const P: usize> Query for AnyPackets<'_, C, P> {
+    type Out = ();
+    #[inline(always)]
+    unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) {
+        const { assert!(P <= 32, "the active mask is a u32") };
+        for (rays, out) in self.rays.chunks(P).zip(self.out.chunks_mut(P)) {
+            (0..rays.len()).for_each(|_| self.counters.ray());
+            // SAFETY: forwarded from the caller.
+            unsafe { any::<K, C, W, B, P>(tree, rays, out, self.counters) };
+        }
+    }
+}
