@@ -1,68 +1,119 @@
 //! Binned surface area heuristic (Wald 2007): candidate planes between equal-width centroid bins.
+//!
+//! One pass over the node's [`PrimRef`]s bins every primitive on all three axes at once; the chosen axis's bins
+//! then give the children's boxes, and the partition their centroid bounds, so children need no pass of their own.
 
-use super::{Decision, NodeView, partition, proper};
+use glam::Vec3;
+
+use super::{Decision, NodeBounds, NodeView, PrimRef, partition, proper};
 use crate::accel::bvh::sah::CostModel;
 use crate::geometry::Aabb;
+
+/// One bin: the union of its primitives' boxes and their number.
+#[derive(Clone, Copy)]
+struct Bin {
+    bounds: Aabb,
+    count: usize,
+}
+
+impl Bin {
+    const EMPTY: Bin = Bin { bounds: Aabb::EMPTY, count: 0 };
+
+    #[inline(always)]
+    fn add(&mut self, b: &Aabb) {
+        self.bounds = self.bounds.union(b);
+        self.count += 1;
+    }
+}
 
 /// Scratch space kept between nodes so that binning allocates once per build.
 #[derive(Default)]
 pub struct Bins {
-    bounds: Vec<Aabb>,
-    counts: Vec<usize>,
+    /// `bin_count` bins per axis, x then y then z.
+    bins: Vec<Bin>,
     right_area: Vec<f32>,
 }
 
+/// Bins every primitive on the three axes in one pass; axes of zero `scale` put everything in their first bin.
+#[inline]
+fn bin_all(bins: &mut [Bin], bin_count: usize, refs: &[PrimRef], min: Vec3, scale: Vec3) {
+    let (bx, rest) = bins.split_at_mut(bin_count);
+    let (by, bz) = rest.split_at_mut(bin_count);
+    let last = bin_count - 1;
+    for r in refs {
+        let f = (r.centroid - min) * scale;
+        bx[(f.x as usize).min(last)].add(&r.bounds);
+        by[(f.y as usize).min(last)].add(&r.bounds);
+        bz[(f.z as usize).min(last)].add(&r.bounds);
+    }
+}
+
 /// Chooses the cheapest plane among `bin_count - 1` per axis, or a leaf when that is cheaper and allowed.
-pub fn split(node: &NodeView<'_>, prims: &mut [u32], bin_count: usize, costs: CostModel, bins: &mut Bins) -> Decision {
+///
+/// On a split, also returns the two children's bounds.
+pub fn split(
+    node: &NodeView<'_>,
+    prims: &mut [u32],
+    refs: &mut [PrimRef],
+    bin_count: usize,
+    costs: CostModel,
+    scratch: &mut Bins,
+) -> (Decision, Option<[NodeBounds; 2]>) {
     let cb = node.centroid_bounds;
     let extent = cb.extent();
     let parent_area = node.bounds.surface_area();
+    let scale = Vec3::from_array(std::array::from_fn(|a| if extent[a] > 0.0 { bin_count as f32 / extent[a] } else { 0.0 }));
+    if scratch.bins.len() != 3 * bin_count {
+        scratch.bins.resize(3 * bin_count, Bin::EMPTY);
+        scratch.right_area.resize(bin_count, 0.0);
+    }
+    scratch.bins.fill(Bin::EMPTY);
+    bin_all(&mut scratch.bins, bin_count, refs, cb.min, scale);
     let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, first bin on the right)
     for axis in 0..3 {
         if extent[axis] <= 0.0 {
             continue;
         }
-        let scale = bin_count as f32 / extent[axis];
-        let bin_of = |p: u32| (((node.centroids[p as usize][axis] - cb.min[axis]) * scale) as usize).min(bin_count - 1);
-        bins.bounds.clear();
-        bins.bounds.resize(bin_count, Aabb::EMPTY);
-        bins.counts.clear();
-        bins.counts.resize(bin_count, 0);
-        for &p in prims.iter() {
-            let b = bin_of(p);
-            bins.bounds[b] = bins.bounds[b].union(&node.boxes[p as usize]);
-            bins.counts[b] += 1;
-        }
-        bins.right_area.clear();
-        bins.right_area.resize(bin_count, 0.0);
+        let bins = &scratch.bins[axis * bin_count..(axis + 1) * bin_count];
+        let right_area = &mut scratch.right_area[..bin_count];
         let mut acc = Aabb::EMPTY;
         for b in (1..bin_count).rev() {
-            acc = acc.union(&bins.bounds[b]);
-            bins.right_area[b] = acc.surface_area();
+            acc = acc.union(&bins[b].bounds);
+            right_area[b] = acc.surface_area();
         }
         let (mut left, mut left_count) = (Aabb::EMPTY, 0);
         for b in 1..bin_count {
-            left = left.union(&bins.bounds[b - 1]);
-            left_count += bins.counts[b - 1];
+            left = left.union(&bins[b - 1].bounds);
+            left_count += bins[b - 1].count;
             let right_count = prims.len() - left_count;
             if left_count == 0 || right_count == 0 {
                 continue;
             }
-            let cost = costs.split_cost(parent_area, left.surface_area(), left_count, bins.right_area[b], right_count);
+            let cost = costs.split_cost(parent_area, left.surface_area(), left_count, right_area[b], right_count);
             if best.is_none_or(|(c, _, _)| cost < c) {
                 best = Some((cost, axis, b));
             }
         }
     }
     let Some((cost, axis, first_right)) = best else {
-        return if node.may_be_leaf { Decision::Leaf } else { Decision::NoSplit };
+        return (if node.may_be_leaf { Decision::Leaf } else { Decision::NoSplit }, None);
     };
     if node.may_be_leaf && costs.leaf_cost(prims.len()) <= cost {
-        return Decision::Leaf;
+        return (Decision::Leaf, None);
     }
-    let scale = bin_count as f32 / extent[axis];
-    let n = partition(prims, |p| {
-        (((node.centroids[p as usize][axis] - cb.min[axis]) * scale) as usize).min(bin_count - 1) < first_right
+    let bins = &scratch.bins[axis * bin_count..(axis + 1) * bin_count];
+    let mut children = [NodeBounds::EMPTY; 2];
+    for (i, bin) in bins.iter().enumerate() {
+        let side = &mut children[(i >= first_right) as usize].bounds;
+        *side = side.union(&bin.bounds);
+    }
+    let (min, s, last) = (cb.min[axis], scale[axis], bin_count - 1);
+    let [left_centroids, right_centroids] = children.each_mut().map(|c| &mut c.centroids);
+    let n = partition(prims, refs, |r| {
+        let c = r.centroid[axis];
+        let left = (((c - min) * s) as usize).min(last) < first_right;
+        if left { left_centroids.grow(r.centroid) } else { right_centroids.grow(r.centroid) }
+        left
     });
-    proper(n, prims.len())
+    (proper(n, prims.len()), Some(children))
 }
