@@ -48,6 +48,65 @@ fn bin_all(bins: &mut [Bin], bin_count: usize, refs: &[PrimRef], min: Vec3, scal
     }
 }
 
+/// The cheapest plane so far.
+#[derive(Clone, Copy)]
+struct Candidate {
+    cost: f32,
+    /// The children's term of the cost ([`CostModel::split_key`]); the cost is non-decreasing in it.
+    key: f32,
+    axis: usize,
+    /// First bin on the right.
+    first_right: usize,
+}
+
+/// Updates `best` with the planes of one axis's `bins` that cost strictly less, in bin order.
+///
+/// Exactly the candidates and comparisons of evaluating every plane: a plane after an empty bin has the children
+/// of the plane before it, so the same cost, and a plane whose key is not below the best's cannot cost less.
+#[inline]
+fn best_plane(
+    bins: &[Bin],
+    right_area: &mut [f32],
+    n: usize,
+    parent_area: f32,
+    costs: CostModel,
+    axis: usize,
+    best: &mut Option<Candidate>,
+) {
+    let right_area = &mut right_area[..bins.len()];
+    let mut acc = Aabb::EMPTY;
+    let mut area = 0.0;
+    for b in (1..bins.len()).rev() {
+        if bins[b].count > 0 {
+            acc = acc.union(&bins[b].bounds);
+            area = acc.surface_area();
+        }
+        right_area[b] = area;
+    }
+    let (mut left, mut left_count) = (Aabb::EMPTY, 0);
+    for b in 1..bins.len() {
+        if bins[b - 1].count == 0 {
+            continue;
+        }
+        left = left.union(&bins[b - 1].bounds);
+        left_count += bins[b - 1].count;
+        let right_count = n - left_count;
+        if right_count == 0 {
+            break;
+        }
+        let key = costs.split_key(left.surface_area(), left_count, right_area[b], right_count);
+        if let Some(c) = best
+            && !(key < c.key)
+        {
+            continue;
+        }
+        let cost = costs.split_cost_of_key(parent_area, key);
+        if best.is_none_or(|c| cost < c.cost) {
+            *best = Some(Candidate { cost, key, axis, first_right: b });
+        }
+    }
+}
+
 /// Chooses the cheapest plane among `bin_count - 1` per axis, or a leaf when that is cheaper and allowed.
 ///
 /// On a split, also returns the two children's bounds.
@@ -69,33 +128,12 @@ pub fn split(
     }
     scratch.bins.fill(Bin::EMPTY);
     bin_all(&mut scratch.bins, bin_count, refs, cb.min, scale);
-    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, first bin on the right)
-    for axis in 0..3 {
-        if extent[axis] <= 0.0 {
-            continue;
-        }
+    let mut best = None;
+    for axis in (0..3).filter(|&a| extent[a] > 0.0) {
         let bins = &scratch.bins[axis * bin_count..(axis + 1) * bin_count];
-        let right_area = &mut scratch.right_area[..bin_count];
-        let mut acc = Aabb::EMPTY;
-        for b in (1..bin_count).rev() {
-            acc = acc.union(&bins[b].bounds);
-            right_area[b] = acc.surface_area();
-        }
-        let (mut left, mut left_count) = (Aabb::EMPTY, 0);
-        for b in 1..bin_count {
-            left = left.union(&bins[b - 1].bounds);
-            left_count += bins[b - 1].count;
-            let right_count = prims.len() - left_count;
-            if left_count == 0 || right_count == 0 {
-                continue;
-            }
-            let cost = costs.split_cost(parent_area, left.surface_area(), left_count, right_area[b], right_count);
-            if best.is_none_or(|(c, _, _)| cost < c) {
-                best = Some((cost, axis, b));
-            }
-        }
+        best_plane(bins, &mut scratch.right_area, prims.len(), parent_area, costs, axis, &mut best);
     }
-    let Some((cost, axis, first_right)) = best else {
+    let Some(Candidate { cost, axis, first_right, .. }) = best else {
         return (if node.may_be_leaf { Decision::Leaf } else { Decision::NoSplit }, None);
     };
     if node.may_be_leaf && costs.leaf_cost(prims.len()) <= cost {
