@@ -82,7 +82,7 @@ pub fn build_in_blocks(spheres: &[Sphere], params: &BvhParams, block: u32) -> Bu
     let boxes: Vec<Aabb> = spheres.iter().map(Sphere::bounds).collect();
     let centroids: Vec<Vec3> = spheres.iter().map(|s| s.center).collect();
     let mut prims: Vec<u32> = (0..spheres.len() as u32).collect();
-    let mut refs: Vec<PrimRef> = boxes.iter().zip(&centroids).map(|(&bounds, &centroid)| PrimRef { bounds, centroid }).collect();
+    let mut refs: Vec<PrimRef> = boxes.iter().zip(&centroids).map(|(b, &c)| PrimRef::new(b, c)).collect();
     let root = NodeBounds::of(&refs);
     let nodes = if spheres.len() >= PARALLEL_MIN_PRIMS && rayon::current_num_threads() > 1 {
         parallel::build(params, block, &boxes, &centroids, &mut prims, &mut refs, root)

@@ -3,25 +3,24 @@
 //! One pass over the node's [`PrimRef`]s bins every primitive on all three axes at once; the chosen axis's bins
 //! then give the children's boxes, and the partition their centroid bounds, so children need no pass of their own.
 
-use glam::Vec3;
+use glam::Vec3A;
 
-use super::{Decision, NodeBounds, NodeView, PrimRef, partition, proper};
+use super::{Box3A, Decision, NodeBounds, NodeView, PrimRef, partition, proper};
 use crate::accel::bvh::sah::CostModel;
-use crate::geometry::Aabb;
 
 /// One bin: the union of its primitives' boxes and their number.
 #[derive(Clone, Copy)]
 struct Bin {
-    bounds: Aabb,
+    bounds: Box3A,
     count: usize,
 }
 
 impl Bin {
-    const EMPTY: Bin = Bin { bounds: Aabb::EMPTY, count: 0 };
+    const EMPTY: Bin = Bin { bounds: Box3A::EMPTY, count: 0 };
 
     #[inline(always)]
-    fn add(&mut self, b: &Aabb) {
-        self.bounds = self.bounds.union(b);
+    fn add(&mut self, b: &Box3A) {
+        self.bounds.add(b);
         self.count += 1;
     }
 }
@@ -36,7 +35,7 @@ pub struct Bins {
 
 /// Bins every primitive on the three axes in one pass; axes of zero `scale` put everything in their first bin.
 #[inline]
-fn bin_all(bins: &mut [Bin], bin_count: usize, refs: &[PrimRef], min: Vec3, scale: Vec3) {
+fn bin_all(bins: &mut [Bin], bin_count: usize, refs: &[PrimRef], min: Vec3A, scale: Vec3A) {
     let (bx, rest) = bins.split_at_mut(bin_count);
     let (by, bz) = rest.split_at_mut(bin_count);
     let last = bin_count - 1;
@@ -74,27 +73,27 @@ fn best_plane(
     best: &mut Option<Candidate>,
 ) {
     let right_area = &mut right_area[..bins.len()];
-    let mut acc = Aabb::EMPTY;
+    let mut acc = Box3A::EMPTY;
     let mut area = 0.0;
     for b in (1..bins.len()).rev() {
         if bins[b].count > 0 {
-            acc = acc.union(&bins[b].bounds);
-            area = acc.surface_area();
+            acc.add(&bins[b].bounds);
+            area = acc.aabb().surface_area();
         }
         right_area[b] = area;
     }
-    let (mut left, mut left_count) = (Aabb::EMPTY, 0);
+    let (mut left, mut left_count) = (Box3A::EMPTY, 0);
     for b in 1..bins.len() {
         if bins[b - 1].count == 0 {
             continue;
         }
-        left = left.union(&bins[b - 1].bounds);
+        left.add(&bins[b - 1].bounds);
         left_count += bins[b - 1].count;
         let right_count = n - left_count;
         if right_count == 0 {
             break;
         }
-        let key = costs.split_key(left.surface_area(), left_count, right_area[b], right_count);
+        let key = costs.split_key(left.aabb().surface_area(), left_count, right_area[b], right_count);
         if let Some(c) = best
             && !(key < c.key)
         {
@@ -121,13 +120,13 @@ pub fn split(
     let cb = node.centroid_bounds;
     let extent = cb.extent();
     let parent_area = node.bounds.surface_area();
-    let scale = Vec3::from_array(std::array::from_fn(|a| if extent[a] > 0.0 { bin_count as f32 / extent[a] } else { 0.0 }));
+    let scale = Vec3A::from_array(std::array::from_fn(|a| if extent[a] > 0.0 { bin_count as f32 / extent[a] } else { 0.0 }));
     if scratch.bins.len() != 3 * bin_count {
         scratch.bins.resize(3 * bin_count, Bin::EMPTY);
         scratch.right_area.resize(bin_count, 0.0);
     }
     scratch.bins.fill(Bin::EMPTY);
-    bin_all(&mut scratch.bins, bin_count, refs, cb.min, scale);
+    bin_all(&mut scratch.bins, bin_count, refs, cb.min.into(), scale);
     let mut best = None;
     for axis in (0..3).filter(|&a| extent[a] > 0.0) {
         let bins = &scratch.bins[axis * bin_count..(axis + 1) * bin_count];
@@ -140,18 +139,18 @@ pub fn split(
         return (Decision::Leaf, None);
     }
     let bins = &scratch.bins[axis * bin_count..(axis + 1) * bin_count];
-    let mut children = [NodeBounds::EMPTY; 2];
+    let mut sides = [Box3A::EMPTY; 2];
     for (i, bin) in bins.iter().enumerate() {
-        let side = &mut children[(i >= first_right) as usize].bounds;
-        *side = side.union(&bin.bounds);
+        sides[(i >= first_right) as usize].add(&bin.bounds);
     }
     let (min, s, last) = (cb.min[axis], scale[axis], bin_count - 1);
-    let [left_centroids, right_centroids] = children.each_mut().map(|c| &mut c.centroids);
+    let mut centroids = [Box3A::EMPTY; 2];
     let n = partition(prims, refs, |r| {
         let c = r.centroid[axis];
         let left = (((c - min) * s) as usize).min(last) < first_right;
-        if left { left_centroids.grow(r.centroid) } else { right_centroids.grow(r.centroid) }
+        centroids[!left as usize].grow(r.centroid);
         left
     });
+    let children = [0, 1].map(|i| NodeBounds { bounds: sides[i].aabb(), centroids: centroids[i].aabb() });
     (proper(n, prims.len()), Some(children))
 }

@@ -9,7 +9,7 @@ pub mod sweep_sah;
 use glam::Vec3;
 
 use crate::geometry::Aabb;
-pub use prim_ref::PrimRef;
+pub use prim_ref::{Box3A, PrimRef};
 
 /// What a split rule decided for a node.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,18 +53,12 @@ impl NodeBounds {
     /// The bounds of `refs`.
     #[inline]
     pub fn of(refs: &[PrimRef]) -> Self {
-        let mut nb = NodeBounds::EMPTY;
+        let (mut bounds, mut centroids) = (Box3A::EMPTY, Box3A::EMPTY);
         for r in refs {
-            nb.grow(r);
+            bounds.add(&r.bounds);
+            centroids.grow(r.centroid);
         }
-        nb
-    }
-
-    /// Grows both boxes to hold `r`.
-    #[inline(always)]
-    pub fn grow(&mut self, r: &PrimRef) {
-        self.bounds = self.bounds.union(&r.bounds);
-        self.centroids.grow(r.centroid);
+        NodeBounds { bounds: bounds.aabb(), centroids: centroids.aabb() }
     }
 }
 

@@ -1,6 +1,10 @@
-//! A primitive's box and centroid, kept in the node's primitive order so that split loops read them in sequence.
+//! A primitive's box and centroid in SIMD lanes, kept in the node's primitive order so that split loops read them
+//! in sequence.
+//!
+//! Unions here are SSE min/max where [`Aabb::union`] is `f32::min`/`max` per lane: the same values for finite
+//! inputs (a box's extremes do not depend on the order or the instruction, short of a tie between -0 and +0).
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 use crate::geometry::Aabb;
 
@@ -8,14 +12,56 @@ use crate::geometry::Aabb;
 #[derive(Clone, Copy, Debug)]
 pub struct PrimRef {
     /// The primitive's box.
-    pub bounds: Aabb,
+    pub bounds: Box3A,
     /// The primitive's centroid.
-    pub centroid: Vec3,
+    pub centroid: Vec3A,
+}
+
+impl PrimRef {
+    /// The reference of a primitive with box `b` and centroid `c`.
+    #[inline]
+    pub fn new(b: &Aabb, c: Vec3) -> Self {
+        PrimRef { bounds: Box3A { min: b.min.into(), max: b.max.into() }, centroid: c.into() }
+    }
+}
+
+/// An axis-aligned box in SIMD lanes; the empty box has `min = +inf`, `max = -inf`.
+#[derive(Clone, Copy, Debug)]
+pub struct Box3A {
+    /// Lower corner.
+    pub min: Vec3A,
+    /// Upper corner.
+    pub max: Vec3A,
+}
+
+impl Box3A {
+    /// The box containing nothing.
+    pub const EMPTY: Box3A = Box3A { min: Vec3A::INFINITY, max: Vec3A::NEG_INFINITY };
+
+    /// Grows the box to contain `b`.
+    #[inline(always)]
+    pub fn add(&mut self, b: &Box3A) {
+        self.min = self.min.min(b.min);
+        self.max = self.max.max(b.max);
+    }
+
+    /// Grows the box to contain `p`.
+    #[inline(always)]
+    pub fn grow(&mut self, p: Vec3A) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    /// The same box as an [`Aabb`].
+    #[inline(always)]
+    pub fn aabb(&self) -> Aabb {
+        Aabb { min: self.min.into(), max: self.max.into() }
+    }
 }
 
 /// Rewrites `refs` from the per-id `boxes` and `centroids` after a split rule reordered `prims` alone.
 pub fn gather(refs: &mut [PrimRef], prims: &[u32], boxes: &[Aabb], centroids: &[Vec3]) {
     for (r, &p) in refs.iter_mut().zip(prims) {
-        *r = PrimRef { bounds: boxes[p as usize], centroid: centroids[p as usize] };
+        *r = PrimRef::new(&boxes[p as usize], centroids[p as usize]);
     }
 }
