@@ -69,11 +69,14 @@ pub fn partition(prims: &mut [u32], refs: &mut [PrimRef], mut left: impl FnMut(&
     assert_eq!(prims.len(), refs.len());
     let mut mid = 0;
     for i in 0..prims.len() {
-        if left(&refs[i]) {
-            prims.swap(i, mid);
-            refs.swap(i, mid);
-            mid += 1;
-        }
+        // Without a branch: a match swaps places `i` and `mid`, a non-match rewrites both in place.
+        let l = left(&refs[i]);
+        let (from_i, from_mid) = if l { (mid, i) } else { (i, mid) };
+        let (p, q) = (prims[from_i], prims[from_mid]);
+        let (r, s) = (refs[from_i], refs[from_mid]);
+        (prims[i], refs[i]) = (p, r);
+        (prims[mid], refs[mid]) = (q, s);
+        mid += l as usize;
     }
     mid
 }
