@@ -156,7 +156,8 @@ impl Inputs<'_> {
                 Split::ObjectMedian => (decision, gather) = (object_median::split(&view, prims), true),
                 Split::BinnedSah => {
                     let bins = &mut scratch.bins;
-                    (decision, children) = binned_sah::split(&view, prims, refs, p.sah_bins as usize, self.costs(), bins);
+                    (decision, children) =
+                        binned_sah::split(&view, prims, refs, p.sah_bins as usize, self.costs(), bins);
                 }
                 Split::SweepSah => {
                     (decision, gather) = (sweep_sah::split(&view, prims, self.costs(), &mut scratch.sweep), true)

@@ -32,7 +32,14 @@ impl SahCosts {
     }
 
     /// Expected cost of splitting a node of surface area `parent_area` into the two given children.
-    pub fn split_cost(&self, parent_area: f32, left_area: f32, left_count: usize, right_area: f32, right_count: usize) -> f32 {
+    pub fn split_cost(
+        &self,
+        parent_area: f32,
+        left_area: f32,
+        left_count: usize,
+        right_area: f32,
+        right_count: usize,
+    ) -> f32 {
         self.split_cost_of_key(parent_area, left_area * left_count as f32 + right_area * right_count as f32)
     }
 
@@ -89,7 +96,14 @@ impl CostModel {
     }
 
     /// Expected cost of splitting a node of surface area `parent_area` into the two given children.
-    pub fn split_cost(&self, parent_area: f32, left_area: f32, left_count: usize, right_area: f32, right_count: usize) -> f32 {
+    pub fn split_cost(
+        &self,
+        parent_area: f32,
+        left_area: f32,
+        left_count: usize,
+        right_area: f32,
+        right_count: usize,
+    ) -> f32 {
         self.costs.split_cost(parent_area, left_area, self.blocks(left_count), right_area, self.blocks(right_count))
     }
 

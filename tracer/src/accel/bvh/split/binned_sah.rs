@@ -78,7 +78,7 @@ fn best_plane(
     for b in (1..bins.len()).rev() {
         if bins[b].count > 0 {
             acc.add(&bins[b].bounds);
-            area = acc.aabb().surface_area();
+            area = acc.surface_area();
         }
         right_area[b] = area;
     }
@@ -93,7 +93,7 @@ fn best_plane(
         if right_count == 0 {
             break;
         }
-        let key = costs.split_key(left.aabb().surface_area(), left_count, right_area[b], right_count);
+        let key = costs.split_key(left.surface_area(), left_count, right_area[b], right_count);
         if let Some(c) = best
             && !(key < c.key)
         {
@@ -120,7 +120,8 @@ pub fn split(
     let cb = node.centroid_bounds;
     let extent = cb.extent();
     let parent_area = node.bounds.surface_area();
-    let scale = Vec3A::from_array(std::array::from_fn(|a| if extent[a] > 0.0 { bin_count as f32 / extent[a] } else { 0.0 }));
+    let scale =
+        Vec3A::from_array(std::array::from_fn(|a| if extent[a] > 0.0 { bin_count as f32 / extent[a] } else { 0.0 }));
     if scratch.bins.len() != 3 * bin_count {
         scratch.bins.resize(3 * bin_count, Bin::EMPTY);
         scratch.right_area.resize(bin_count, 0.0);

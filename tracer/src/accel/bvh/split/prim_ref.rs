@@ -4,7 +4,7 @@
 //! Unions here are SSE min/max where [`Aabb::union`] is `f32::min`/`max` per lane: the same values for finite
 //! inputs (a box's extremes do not depend on the order or the instruction, short of a tie between -0 and +0).
 
-use glam::{Vec3, Vec3A};
+use glam::{Vec3, Vec3A, Vec3Swizzles};
 
 use crate::geometry::Aabb;
 
@@ -50,6 +50,17 @@ impl Box3A {
     pub fn grow(&mut self, p: Vec3A) {
         self.min = self.min.min(p);
         self.max = self.max.max(p);
+    }
+
+    /// [`Aabb::surface_area`] of the same box, by the same operations: `2 * ((x*y + y*z) + z*x)`, zero when empty.
+    #[inline(always)]
+    pub fn surface_area(&self) -> f32 {
+        if self.min.cmpgt(self.max).any() {
+            return 0.0;
+        }
+        let e = self.max - self.min;
+        let p = e * e.yzx();
+        2.0 * (p.x + p.y + p.z)
     }
 
     /// The same box as an [`Aabb`].
