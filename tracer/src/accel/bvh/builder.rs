@@ -146,6 +146,7 @@ impl Inputs<'_> {
         // Rules that reorder `prims` alone leave `refs` to be gathered again.
         let (mut decision, mut children, mut gather) = (Decision::Leaf, None, false);
         if n <= 1 {
+            // A leaf, as initialized.
         } else if depth + ceil_log2(n) >= MAX_DEPTH - 1 {
             // Halving from here keeps every leaf within MAX_DEPTH, whatever the rule would have done.
             (decision, gather) = (object_median::median(&view, prims), true);
