@@ -15,7 +15,7 @@ use glam::Vec3;
 
 use super::params::{BvhParams, Split};
 use super::sah::CostModel;
-use super::split::{self, Decision, NodeView, binned_sah, object_median, sweep_sah};
+use super::split::{self, Decision, NodeBounds, NodeView, PrimRef, binned_sah, object_median, prim_ref, sweep_sah};
 use crate::geometry::{Aabb, Sphere};
 
 /// Deepest level any builder produces; traversal stacks hold this many entries.
@@ -82,11 +82,13 @@ pub fn build_in_blocks(spheres: &[Sphere], params: &BvhParams, block: u32) -> Bu
     let boxes: Vec<Aabb> = spheres.iter().map(Sphere::bounds).collect();
     let centroids: Vec<Vec3> = spheres.iter().map(|s| s.center).collect();
     let mut prims: Vec<u32> = (0..spheres.len() as u32).collect();
+    let mut refs: Vec<PrimRef> = boxes.iter().zip(&centroids).map(|(b, &c)| PrimRef::new(b, c)).collect();
+    let root = NodeBounds::of(&refs);
     let nodes = if spheres.len() >= PARALLEL_MIN_PRIMS && rayon::current_num_threads() > 1 {
-        parallel::build(params, block, &boxes, &centroids, &mut prims)
+        parallel::build(params, block, &boxes, &centroids, &mut prims, &mut refs, root)
     } else {
         let mut b = Builder::new(params, block, &boxes, &centroids, spheres.len());
-        b.build_node(0, &mut prims, 0, 0);
+        b.build_node(0, &mut prims, &mut refs, root, 0, 0);
         b.nodes
     };
     BuiltTree { nodes, prim_order: prims }
@@ -122,44 +124,57 @@ impl Inputs<'_> {
         CostModel { costs: self.params.sah_costs, block: self.block }
     }
 
-    /// The node's bounds and what to do with it (leaf or split point, after reordering `prims`).
+    /// What to do with the node of bounds `nb` (leaf, or split point after reordering `prims` and `refs`), and on a
+    /// split the children's bounds.
     #[inline(always)]
-    fn decide(&self, prims: &mut [u32], depth: usize, scratch: &mut Scratch) -> (Aabb, Decision) {
-        let mut bounds = Aabb::EMPTY;
-        let mut centroid_bounds = Aabb::EMPTY;
-        for &p in prims.iter() {
-            bounds = bounds.union(&self.boxes[p as usize]);
-            centroid_bounds.grow(self.centroids[p as usize]);
-        }
+    fn decide(
+        &self,
+        prims: &mut [u32],
+        refs: &mut [PrimRef],
+        nb: NodeBounds,
+        depth: usize,
+        scratch: &mut Scratch,
+    ) -> (Decision, Option<[NodeBounds; 2]>) {
         let n = prims.len();
         let view = NodeView {
             boxes: self.boxes,
             centroids: self.centroids,
-            bounds,
-            centroid_bounds,
+            bounds: nb.bounds,
+            centroid_bounds: nb.centroids,
             may_be_leaf: n <= self.params.leaf_size as usize,
         };
-        let decision = if n <= 1 {
-            Decision::Leaf
+        // Rules that reorder `prims` alone leave `refs` to be gathered again.
+        let (mut decision, mut children, mut gather) = (Decision::Leaf, None, false);
+        if n <= 1 {
+            // A leaf, as initialized.
         } else if depth + ceil_log2(n) >= MAX_DEPTH - 1 {
             // Halving from here keeps every leaf within MAX_DEPTH, whatever the rule would have done.
-            object_median::median(&view, prims)
+            (decision, gather) = (object_median::median(&view, prims), true);
         } else {
             let p = self.params;
             match p.split {
-                Split::CentroidMidpoint => split::centroid_midpoint::split(&view, prims),
-                Split::ObjectMedian => object_median::split(&view, prims),
+                Split::CentroidMidpoint => decision = split::centroid_midpoint::split(&view, prims, refs),
+                Split::ObjectMedian => (decision, gather) = (object_median::split(&view, prims), true),
                 Split::BinnedSah => {
-                    binned_sah::split(&view, prims, p.sah_bins as usize, self.costs(), &mut scratch.bins)
+                    let bins = &mut scratch.bins;
+                    (decision, children) =
+                        binned_sah::split(&view, prims, refs, p.sah_bins as usize, self.costs(), bins);
                 }
-                Split::SweepSah => sweep_sah::split(&view, prims, self.costs(), &mut scratch.sweep),
+                Split::SweepSah => {
+                    (decision, gather) = (sweep_sah::split(&view, prims, self.costs(), &mut scratch.sweep), true)
+                }
             }
-        };
-        let decision = match decision {
-            Decision::NoSplit => object_median::median(&view, prims),
-            d => d,
-        };
-        (bounds, decision)
+        }
+        if decision == Decision::NoSplit {
+            (decision, children, gather) = (object_median::median(&view, prims), None, true);
+        }
+        if gather {
+            prim_ref::gather(refs, prims, self.boxes, self.centroids);
+        }
+        if let (Decision::Split(mid), None) = (decision, children) {
+            children = Some([NodeBounds::of(&refs[..mid]), NodeBounds::of(&refs[mid..])]);
+        }
+        (decision, children)
     }
 }
 
@@ -178,16 +193,26 @@ impl<'a> Builder<'a> {
         Builder { inputs: Inputs { params, block, boxes, centroids }, nodes, scratch: Scratch::default() }
     }
 
-    fn build_node(&mut self, index: usize, prims: &mut [u32], offset: usize, depth: usize) {
-        let (bounds, decision) = self.inputs.decide(prims, depth, &mut self.scratch);
-        match decision {
-            Decision::Split(mid) => {
+    /// Builds the node at `index` over `prims` (with their `refs`, of bounds `nb`), then its subtree.
+    fn build_node(
+        &mut self,
+        index: usize,
+        prims: &mut [u32],
+        refs: &mut [PrimRef],
+        nb: NodeBounds,
+        offset: usize,
+        depth: usize,
+    ) {
+        let bounds = nb.bounds;
+        match self.inputs.decide(prims, refs, nb, depth, &mut self.scratch) {
+            (Decision::Split(mid), Some([l, r])) => {
                 let first = self.nodes.len();
                 self.nodes.extend([PLACEHOLDER, PLACEHOLDER]);
                 self.nodes[index] = FlatNode { bounds, first: first as u32, prim_count: FlatNode::INTERIOR };
                 let (left, right) = prims.split_at_mut(mid);
-                self.build_node(first, left, offset, depth + 1);
-                self.build_node(first + 1, right, offset + mid, depth + 1);
+                let (left_refs, right_refs) = refs.split_at_mut(mid);
+                self.build_node(first, left, left_refs, l, offset, depth + 1);
+                self.build_node(first + 1, right, right_refs, r, offset + mid, depth + 1);
             }
             _ => self.nodes[index] = FlatNode { bounds, first: offset as u32, prim_count: prims.len() as u32 },
         }
@@ -217,9 +242,17 @@ mod parallel {
     }
 
     /// Builds the whole tree; `prims.len() >= PARALLEL_MIN_PRIMS`.
-    pub(super) fn build(params: &BvhParams, block: u32, boxes: &[Aabb], centroids: &[Vec3], prims: &mut [u32]) -> Vec<FlatNode> {
+    pub(super) fn build(
+        params: &BvhParams,
+        block: u32,
+        boxes: &[Aabb],
+        centroids: &[Vec3],
+        prims: &mut [u32],
+        refs: &mut [PrimRef],
+        nb: NodeBounds,
+    ) -> Vec<FlatNode> {
         let inputs = Inputs { params, block, boxes, centroids };
-        let (root, desc) = subtree(inputs, prims, 0, 0);
+        let (root, desc) = subtree(inputs, prims, refs, nb, 0, 0);
         let mut nodes = Vec::with_capacity(1 + desc.len);
         // Descendant-relative index i is array index 1 + i.
         nodes.push(shifted(root, 1));
@@ -240,24 +273,33 @@ mod parallel {
 
     /// The subtree over `prims`: its root (an interior root's `first` relative to the start of its
     /// descendants) and its descendants.
-    fn subtree(inputs: Inputs<'_>, prims: &mut [u32], offset: usize, depth: usize) -> (FlatNode, Descendants) {
+    fn subtree(
+        inputs: Inputs<'_>,
+        prims: &mut [u32],
+        refs: &mut [PrimRef],
+        nb: NodeBounds,
+        offset: usize,
+        depth: usize,
+    ) -> (FlatNode, Descendants) {
         if prims.len() < PARALLEL_MIN_PRIMS {
             let mut b = Builder::new(inputs.params, inputs.block, inputs.boxes, inputs.centroids, prims.len());
-            b.build_node(0, prims, offset, depth);
+            b.build_node(0, prims, refs, nb, offset, depth);
             // Array index i of `b.nodes` (i >= 1) is descendant index i - 1.
             let root = shifted(b.nodes[0], -1);
             let len = b.nodes.len() - 1;
             return (root, Descendants { segments: vec![Segment { nodes: b.nodes, skip: 1, shift: -1 }], len });
         }
-        let (bounds, decision) = inputs.decide(prims, depth, &mut Scratch::default());
-        let Decision::Split(mid) = decision else {
+        let bounds = nb.bounds;
+        let (Decision::Split(mid), Some([l_nb, r_nb])) = inputs.decide(prims, refs, nb, depth, &mut Scratch::default())
+        else {
             let leaf = FlatNode { bounds, first: offset as u32, prim_count: prims.len() as u32 };
             return (leaf, Descendants::default());
         };
         let (left, right) = prims.split_at_mut(mid);
+        let (left_refs, right_refs) = refs.split_at_mut(mid);
         let ((l, l_desc), (r, r_desc)) = rayon::join(
-            || subtree(inputs, left, offset, depth + 1),
-            || subtree(inputs, right, offset + mid, depth + 1),
+            || subtree(inputs, left, left_refs, l_nb, offset, depth + 1),
+            || subtree(inputs, right, right_refs, r_nb, offset + mid, depth + 1),
         );
         // Descendants: the children pair, then the left child's descendants, then the right's.
         let (l_start, r_start) = (2, 2 + l_desc.len as isize);

@@ -32,9 +32,25 @@ impl SahCosts {
     }
 
     /// Expected cost of splitting a node of surface area `parent_area` into the two given children.
-    pub fn split_cost(&self, parent_area: f32, left_area: f32, left_count: usize, right_area: f32, right_count: usize) -> f32 {
+    pub fn split_cost(
+        &self,
+        parent_area: f32,
+        left_area: f32,
+        left_count: usize,
+        right_area: f32,
+        right_count: usize,
+    ) -> f32 {
+        self.split_cost_of_key(parent_area, left_area * left_count as f32 + right_area * right_count as f32)
+    }
+
+    /// [`SahCosts::split_cost`] from its children's term `key = left_area * left_count + right_area * right_count`.
+    ///
+    /// Every step is monotone, so the cost is non-decreasing in `key`: a candidate whose key is not below another's
+    /// cannot cost less, and a split search can skip computing its cost.
+    #[inline(always)]
+    pub fn split_cost_of_key(&self, parent_area: f32, key: f32) -> f32 {
         let parent_area = if parent_area > 0.0 { parent_area } else { 1.0 };
-        self.traversal + self.intersection * (left_area * left_count as f32 + right_area * right_count as f32) / parent_area
+        self.traversal + self.intersection * key / parent_area
     }
 }
 
@@ -71,7 +87,7 @@ impl CostModel {
     /// Blocks needed for `count` spheres.
     #[inline(always)]
     fn blocks(&self, count: usize) -> usize {
-        count.div_ceil(self.block as usize)
+        if self.block == 1 { count } else { count.div_ceil(self.block as usize) }
     }
 
     /// Expected cost of making a node of `count` spheres a leaf.
@@ -80,8 +96,27 @@ impl CostModel {
     }
 
     /// Expected cost of splitting a node of surface area `parent_area` into the two given children.
-    pub fn split_cost(&self, parent_area: f32, left_area: f32, left_count: usize, right_area: f32, right_count: usize) -> f32 {
+    pub fn split_cost(
+        &self,
+        parent_area: f32,
+        left_area: f32,
+        left_count: usize,
+        right_area: f32,
+        right_count: usize,
+    ) -> f32 {
         self.costs.split_cost(parent_area, left_area, self.blocks(left_count), right_area, self.blocks(right_count))
+    }
+
+    /// [`CostModel::split_cost`] from [`CostModel::split_key`]'s term.
+    #[inline(always)]
+    pub fn split_cost_of_key(&self, parent_area: f32, key: f32) -> f32 {
+        self.costs.split_cost_of_key(parent_area, key)
+    }
+
+    /// The children's term of [`CostModel::split_cost`]; see [`SahCosts::split_cost_of_key`].
+    #[inline(always)]
+    pub fn split_key(&self, left_area: f32, left_count: usize, right_area: f32, right_count: usize) -> f32 {
+        left_area * self.blocks(left_count) as f32 + right_area * self.blocks(right_count) as f32
     }
 }
 

@@ -3,11 +3,13 @@
 pub mod binned_sah;
 pub mod centroid_midpoint;
 pub mod object_median;
+pub mod prim_ref;
 pub mod sweep_sah;
 
 use glam::Vec3;
 
 use crate::geometry::Aabb;
+pub use prim_ref::{Box3A, PrimRef};
 
 /// What a split rule decided for a node.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -35,14 +37,46 @@ pub struct NodeView<'a> {
     pub may_be_leaf: bool,
 }
 
-/// Moves the primitives for which `left` holds to the front; returns how many there are.
-pub fn partition(prims: &mut [u32], mut left: impl FnMut(u32) -> bool) -> usize {
+/// A node's box and the box of its primitives' centroids.
+#[derive(Clone, Copy, Debug)]
+pub struct NodeBounds {
+    /// Union of the primitives' boxes.
+    pub bounds: Aabb,
+    /// Bounds of the primitives' centroids.
+    pub centroids: Aabb,
+}
+
+impl NodeBounds {
+    /// Bounds of nothing.
+    pub const EMPTY: NodeBounds = NodeBounds { bounds: Aabb::EMPTY, centroids: Aabb::EMPTY };
+
+    /// The bounds of `refs`.
+    #[inline]
+    pub fn of(refs: &[PrimRef]) -> Self {
+        let (mut bounds, mut centroids) = (Box3A::EMPTY, Box3A::EMPTY);
+        for r in refs {
+            bounds.add(&r.bounds);
+            centroids.grow(r.centroid);
+        }
+        NodeBounds { bounds: bounds.aabb(), centroids: centroids.aabb() }
+    }
+}
+
+/// Moves the primitives (ids and their [`PrimRef`]s alike) for which `left` holds to the front; returns how many
+/// there are. The order is that of swapping each match with the first non-match before it.
+#[inline]
+pub fn partition(prims: &mut [u32], refs: &mut [PrimRef], mut left: impl FnMut(&PrimRef) -> bool) -> usize {
+    assert_eq!(prims.len(), refs.len());
     let mut mid = 0;
     for i in 0..prims.len() {
-        if left(prims[i]) {
-            prims.swap(i, mid);
-            mid += 1;
-        }
+        // Without a branch: a match swaps places `i` and `mid`, a non-match rewrites both in place.
+        let l = left(&refs[i]);
+        let (from_i, from_mid) = if l { (mid, i) } else { (i, mid) };
+        let (p, q) = (prims[from_i], prims[from_mid]);
+        let (r, s) = (refs[from_i], refs[from_mid]);
+        (prims[i], refs[i]) = (p, r);
+        (prims[mid], refs[mid]) = (q, s);
+        mid += l as usize;
     }
     mid
 }
