@@ -202,6 +202,21 @@ fn wide_bvh_runs_validated_and_records_its_kernel() {
 }
 
 #[test]
+fn a_packet_size_not_allowed_is_one_line_exit_2_and_nothing_written() {
+    let dir = temp("packet");
+    let cfg = dir.join("packet.toml");
+    let wide = AccelKind::WideBvh.name();
+    std::fs::write(&cfg, format!("name = \"t\"\n[sweep]\naccel = \"{wide}\"\nworkload = \"primary\"\npacket_size = 4\n")).unwrap();
+    let out = dir.join("out");
+    let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    assert!(err.contains("packet.toml: sweep.packet_size[0]: 4 is not allowed (allowed: 1, 8, 16)"), "{err}");
+    assert!(!out.exists(), "nothing written");
+}
+
+#[test]
 fn validate_prints_runs_and_an_estimate() {
     let o = harness().args(["validate", "experiments/paper.toml"]).output().unwrap();
     let out = String::from_utf8_lossy(&o.stdout);
