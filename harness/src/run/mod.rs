@@ -328,10 +328,9 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<
                 let mut recorded = row(exp, c, rep, &timing, v, &provenance, load, ts, plan.shard);
                 recorded.repetition_rule = rule_of(c);
                 recorded.interval_width =
-                    sampler.record(run.config, &c.id, adaptive::timed_value(&timing, metric_of(c))).map(|w| {
-                        let rounded = schema::Row { interval_width: Some(w), ..Default::default() }.rounded();
-                        rounded.interval_width.unwrap_or(w)
-                    });
+                    sampler.record(run.config, &c.id, adaptive::timed_value(&timing, metric_of(c)));
+                // Rounding is idempotent: the rest of the row was rounded by `row` already.
+                let recorded = recorded.rounded();
                 log.append(&recorded)
                     .map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))?;
                 let width = recorded.interval_width.map_or(String::new(), |w| format!(" (interval ±{:.1}%)", w * 50.0));
