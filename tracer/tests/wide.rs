@@ -6,6 +6,8 @@
 
 use glam::Vec3;
 use tracer::accel::bvh::builder;
+use tracer::accel::wide::collapse::collapse;
+use tracer::accel::wide::leaf::Block;
 use tracer::accel::wide::{ChildOrdering, Kernel, WideBvh, WideParams};
 use tracer::accel::{AccelKind, AccelParams, Accelerator, BuiltAccel, BvhParams, Hit, Split};
 use tracer::counters::{NoCounters, WorkCounters};
@@ -44,7 +46,8 @@ fn every_configuration_agrees_exactly_with_brute_force_on_the_test_scenes() {
 fn degenerate_scenes_agree_exactly() {
     let same: Vec<Sphere> = (0..100).map(|_| Sphere::new(Vec3::new(1.0, 2.0, 3.0), 0.5)).collect();
     let nested: Vec<Sphere> = (1..=100).map(|i| Sphere::new(Vec3::new(1.0, 2.0, 3.0), i as f32 * 0.1)).collect();
-    let mut extreme: Vec<Sphere> = (0..50).map(|i| Sphere::new(Vec3::new(i as f32, 0.5, -10.0 - i as f32), 1e-5)).collect();
+    let mut extreme: Vec<Sphere> =
+        (0..50).map(|i| Sphere::new(Vec3::new(i as f32, 0.5, -10.0 - i as f32), 1e-5)).collect();
     extreme.push(Sphere::new(Vec3::ZERO, 1e6));
     extreme.push(Sphere::new(Vec3::new(3.0, 1e4, -2.0), 1e3));
     let deep: Vec<Sphere> = (0..120).map(|i| Sphere::new(Vec3::new(1.3f32.powi(i), 0.0, 0.0), 0.01)).collect();
@@ -92,8 +95,14 @@ fn trace(tree: &WideBvh, rays: &[Ray]) -> Vec<(Option<Hit>, bool, WorkCounters, 
         sum.1 += *a;
     }
     assert_eq!((closest.rays, any.rays), (rays.len() as u64, rays.len() as u64));
-    assert_eq!((closest.nodes_visited, closest.box_tests, closest.prim_tests), (sum.0.nodes_visited, sum.0.box_tests, sum.0.prim_tests));
-    assert_eq!((any.nodes_visited, any.box_tests, any.prim_tests), (sum.1.nodes_visited, sum.1.box_tests, sum.1.prim_tests));
+    assert_eq!(
+        (closest.nodes_visited, closest.box_tests, closest.prim_tests),
+        (sum.0.nodes_visited, sum.0.box_tests, sum.0.prim_tests)
+    );
+    assert_eq!(
+        (any.nodes_visited, any.box_tests, any.prim_tests),
+        (sum.1.nodes_visited, sum.1.box_tests, sum.1.prim_tests)
+    );
     per_ray
 }
 
@@ -130,7 +139,10 @@ fn same_seed_same_tree_and_counts_in_any_thread_count() {
     let rays = testing::sphere_ray_mix(&spheres, 3, 500);
     let bvh = BvhParams { split: Split::BinnedSah, leaf_size: 4, ..BvhParams::default() };
     let pool = |t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
-    for wide in [WideParams::default(), WideParams { width: 4, leaf_block: 16, kernel: Kernel::Scalar, order: ChildOrdering::Octant, packet: 8 }] {
+    for wide in [
+        WideParams::default(),
+        WideParams { width: 4, leaf_block: 16, kernel: Kernel::Scalar, order: ChildOrdering::Octant, packet: 8 },
+    ] {
         let trees: Vec<WideBvh> = [1, 2, 1].map(|t| pool(t).install(|| WideBvh::build(&spheres, &bvh, &wide))).into();
         let counts = |t: &WideBvh| {
             let mut c = WorkCounters::default();
@@ -245,6 +257,42 @@ fn the_sah_in_blocks_of_one_is_the_ordinary_sah_and_wider_blocks_make_bigger_lea
         let leaves = |b: u32| builder::build_in_blocks(&spheres, &bvh, b).nodes.iter().filter(|n| n.is_leaf()).count();
         let (l1, l8) = (leaves(1), leaves(8));
         assert!(l8 * 2 < l1, "{split:?}: {l8} leaves with blocks of 8 vs {l1}");
+    }
+}
+
+/// The wide tree collapsed from `build_for_blocks` (which stops splitting at one block) against the one collapsed
+/// from the full `build_in_blocks` tree: the same nodes, and the same blocks but for the order of their lanes.
+fn assert_same_wide_tree<const W: usize, const B: usize>(label: &str, spheres: &[Sphere], bvh: &BvhParams) {
+    let full = collapse::<W, B>(&builder::build_in_blocks(spheres, bvh, B as u32));
+    let stopped = collapse::<W, B>(&builder::build_for_blocks(spheres, bvh, B as u32));
+    assert!(full.nodes == stopped.nodes, "{label} W={W} B={B} {bvh:?}: nodes differ");
+    assert_eq!(full.blocks.len(), stopped.blocks.len(), "{label} W={W} B={B} {bvh:?}");
+    let lanes = |b: &Block<B>| {
+        let mut lanes: Vec<_> =
+            (0..B).map(|l| (b.ids[l], [b.cx[l], b.cy[l], b.cz[l], b.r2[l]].map(f32::to_bits))).collect();
+        lanes.sort();
+        lanes
+    };
+    for (i, (f, s)) in full.blocks.iter().zip(&stopped.blocks).enumerate() {
+        assert_eq!(lanes(f), lanes(s), "{label} W={W} B={B} {bvh:?}: block {i}");
+    }
+}
+
+#[test]
+fn stopping_the_binary_build_at_one_block_gives_the_same_wide_tree() {
+    let mut scenes: Vec<(String, Vec<Sphere>)> =
+        SceneKind::ALL.into_iter().map(|kind| (kind.name().to_string(), kind.generate(6000, 3).spheres)).collect();
+    scenes.push(("coincident".into(), vec![Sphere::new(Vec3::new(1.0, 2.0, 3.0), 0.5); 100]));
+    for (label, spheres) in &scenes {
+        for split in Split::ALL {
+            for leaf_size in [1, 4, 8, 16] {
+                let bvh = BvhParams { split, leaf_size, ..BvhParams::default() };
+                assert_same_wide_tree::<4, 4>(label, spheres, &bvh);
+                assert_same_wide_tree::<8, 8>(label, spheres, &bvh);
+                assert_same_wide_tree::<8, 16>(label, spheres, &bvh);
+                assert_same_wide_tree::<4, 16>(label, spheres, &bvh);
+            }
+        }
     }
 }
 

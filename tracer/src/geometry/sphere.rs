@@ -19,10 +19,13 @@ impl Sphere {
         Self { center, radius }
     }
 
+    /// Relative widening of [`Sphere::bounds`]: `(|center| + radius)` times this on every side.
+    pub const BOUNDS_PAD: f32 = 4.0 * f32::EPSILON;
+
     /// Bounding box, widened by a few ulps so that rounding never puts a surface point outside it.
     pub fn bounds(&self) -> Aabb {
         let r = Vec3::splat(self.radius);
-        let pad = (self.center.abs() + r) * (4.0 * f32::EPSILON);
+        let pad = (self.center.abs() + r) * Self::BOUNDS_PAD;
         Aabb { min: self.center - r - pad, max: self.center + r + pad }
     }
 

@@ -53,6 +53,8 @@ pub struct BuiltTree {
     pub nodes: Vec<FlatNode>,
     /// Primitive ids in leaf order.
     pub prim_order: Vec<u32>,
+    /// The spheres of `prim_order`, in the same order (the builder's own copy, read in sequence).
+    pub ordered_spheres: Vec<Sphere>,
 }
 
 /// Nodes of at least this many primitives split in parallel (when the pool has more than one thread): each
@@ -75,23 +77,42 @@ pub fn build(spheres: &[Sphere], params: &BvhParams) -> BuiltTree {
 /// [`build`], with the SAH splits counting a leaf's spheres in SIMD blocks of `block` (see [`CostModel`]);
 /// `block = 1` is [`build`] exactly. The other splits ignore `block`.
 pub fn build_in_blocks(spheres: &[Sphere], params: &BvhParams, block: u32) -> BuiltTree {
+    build_with(spheres, params, block, 0)
+}
+
+/// The binary tree a wide BVH with leaf blocks of `block` spheres collapses: [`build_in_blocks`], except that nodes
+/// of at most `block` spheres are leaves, whatever `leaf_size` says.
+///
+/// The collapse never opens such a node: its whole subtree becomes one leaf of one block. So splitting it is work
+/// thrown away (on random spheres with leaves of 4 and blocks of 8, half of the build's time), and the wide tree
+/// collapsed from this tree is the one collapsed from [`build_in_blocks`]'s, but for the order of the spheres
+/// inside a block. Embree's wide builders stop at their leaf block the same way.
+pub fn build_for_blocks(spheres: &[Sphere], params: &BvhParams, block: u32) -> BuiltTree {
+    build_with(spheres, params, block, block as usize)
+}
+
+/// The build of [`build_in_blocks`], with nodes of at most `leaf_below` spheres made leaves without a decision.
+fn build_with(spheres: &[Sphere], params: &BvhParams, block: u32, leaf_below: usize) -> BuiltTree {
     assert!(block >= 1, "a SIMD block holds at least one sphere");
     if let Err(e) = params.validate() {
         panic!("invalid BVH parameters: {e}");
     }
-    let boxes: Vec<Aabb> = spheres.iter().map(Sphere::bounds).collect();
+    // Only the sweep reads boxes by id; the other rules read a node's spheres through its `PrimRef`s.
+    let boxes: Vec<Aabb> =
+        if params.split == Split::SweepSah { spheres.iter().map(Sphere::bounds).collect() } else { Vec::new() };
     let centroids: Vec<Vec3> = spheres.iter().map(|s| s.center).collect();
+    let inputs = Inputs { params, block, leaf_below, spheres, boxes: &boxes, centroids: &centroids };
     let mut prims: Vec<u32> = (0..spheres.len() as u32).collect();
-    let mut refs: Vec<PrimRef> = boxes.iter().zip(&centroids).map(|(b, &c)| PrimRef::new(b, c)).collect();
+    let mut refs: Vec<PrimRef> = spheres.iter().map(PrimRef::new).collect();
     let root = NodeBounds::of(&refs);
     let nodes = if spheres.len() >= PARALLEL_MIN_PRIMS && rayon::current_num_threads() > 1 {
-        parallel::build(params, block, &boxes, &centroids, &mut prims, &mut refs, root)
+        parallel::build(inputs, &mut prims, &mut refs, root)
     } else {
-        let mut b = Builder::new(params, block, &boxes, &centroids, spheres.len());
+        let mut b = Builder::new(inputs, spheres.len());
         b.build_node(0, &mut prims, &mut refs, root, 0, 0);
         b.nodes
     };
-    BuiltTree { nodes, prim_order: prims }
+    BuiltTree { nodes, prim_order: prims, ordered_spheres: refs.iter().map(PrimRef::sphere).collect() }
 }
 
 fn ceil_log2(n: usize) -> usize {
@@ -100,12 +121,16 @@ fn ceil_log2(n: usize) -> usize {
 
 const PLACEHOLDER: FlatNode = FlatNode { bounds: Aabb::EMPTY, first: 0, prim_count: 0 };
 
-/// What every node's split decision reads: the parameters and the per-primitive boxes and centroids.
+/// What every node's split decision reads: the parameters and the per-primitive spheres, boxes and centroids.
 #[derive(Clone, Copy)]
 struct Inputs<'a> {
     params: &'a BvhParams,
     /// Spheres per SIMD leaf block the SAH splits count in (see [`CostModel`]).
     block: u32,
+    /// Nodes of at most this many spheres are leaves, without a split decision (0: none are).
+    leaf_below: usize,
+    spheres: &'a [Sphere],
+    /// Boxes by primitive id; empty unless the split is the sweep, the one rule that reads them.
     boxes: &'a [Aabb],
     centroids: &'a [Vec3],
 }
@@ -145,7 +170,7 @@ impl Inputs<'_> {
         };
         // Rules that reorder `prims` alone leave `refs` to be gathered again.
         let (mut decision, mut children, mut gather) = (Decision::Leaf, None, false);
-        if n <= 1 {
+        if n <= 1 || n <= self.leaf_below {
             // A leaf, as initialized.
         } else if depth + ceil_log2(n) >= MAX_DEPTH - 1 {
             // Halving from here keeps every leaf within MAX_DEPTH, whatever the rule would have done.
@@ -169,7 +194,7 @@ impl Inputs<'_> {
             (decision, children, gather) = (object_median::median(&view, prims), None, true);
         }
         if gather {
-            prim_ref::gather(refs, prims, self.boxes, self.centroids);
+            prim_ref::gather(refs, prims, self.spheres);
         }
         if let (Decision::Split(mid), None) = (decision, children) {
             children = Some([NodeBounds::of(&refs[..mid]), NodeBounds::of(&refs[mid..])]);
@@ -187,10 +212,10 @@ struct Builder<'a> {
 
 impl<'a> Builder<'a> {
     /// A builder whose `nodes` hold the subtree root's slot (index 0) and room for a subtree of `prim_count`.
-    fn new(params: &'a BvhParams, block: u32, boxes: &'a [Aabb], centroids: &'a [Vec3], prim_count: usize) -> Self {
+    fn new(inputs: Inputs<'a>, prim_count: usize) -> Self {
         let mut nodes = Vec::with_capacity(2 * prim_count.max(1));
         nodes.push(PLACEHOLDER);
-        Builder { inputs: Inputs { params, block, boxes, centroids }, nodes, scratch: Scratch::default() }
+        Builder { inputs, nodes, scratch: Scratch::default() }
     }
 
     /// Builds the node at `index` over `prims` (with their `refs`, of bounds `nb`), then its subtree.
@@ -242,16 +267,7 @@ mod parallel {
     }
 
     /// Builds the whole tree; `prims.len() >= PARALLEL_MIN_PRIMS`.
-    pub(super) fn build(
-        params: &BvhParams,
-        block: u32,
-        boxes: &[Aabb],
-        centroids: &[Vec3],
-        prims: &mut [u32],
-        refs: &mut [PrimRef],
-        nb: NodeBounds,
-    ) -> Vec<FlatNode> {
-        let inputs = Inputs { params, block, boxes, centroids };
+    pub(super) fn build(inputs: Inputs<'_>, prims: &mut [u32], refs: &mut [PrimRef], nb: NodeBounds) -> Vec<FlatNode> {
         let (root, desc) = subtree(inputs, prims, refs, nb, 0, 0);
         let mut nodes = Vec::with_capacity(1 + desc.len);
         // Descendant-relative index i is array index 1 + i.
@@ -282,7 +298,7 @@ mod parallel {
         depth: usize,
     ) -> (FlatNode, Descendants) {
         if prims.len() < PARALLEL_MIN_PRIMS {
-            let mut b = Builder::new(inputs.params, inputs.block, inputs.boxes, inputs.centroids, prims.len());
+            let mut b = Builder::new(inputs, prims.len());
             b.build_node(0, prims, refs, nb, offset, depth);
             // Array index i of `b.nodes` (i >= 1) is descendant index i - 1.
             let root = shifted(b.nodes[0], -1);

@@ -24,8 +24,7 @@ impl FlatBvh {
     /// identical whatever the thread count (see [`builder`]).
     pub fn build(spheres: &[Sphere], params: &BvhParams) -> Self {
         let built = builder::build(spheres, params);
-        let ordered = built.prim_order.iter().map(|&p| spheres[p as usize]).collect();
-        Self { nodes: built.nodes, spheres: ordered, prim_ids: built.prim_order, params: *params }
+        Self { nodes: built.nodes, spheres: built.ordered_spheres, prim_ids: built.prim_order, params: *params }
     }
 
     /// The parameters it was built with.

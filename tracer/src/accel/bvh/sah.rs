@@ -86,8 +86,10 @@ pub struct CostModel {
 impl CostModel {
     /// Blocks needed for `count` spheres.
     #[inline(always)]
-    fn blocks(&self, count: usize) -> usize {
-        if self.block == 1 { count } else { count.div_ceil(self.block as usize) }
+    pub fn blocks(&self, count: usize) -> usize {
+        // Blocks of SIMD lanes come in powers of two: a shift, not a division, in the split search's inner loop.
+        let block = self.block as usize;
+        if block.is_power_of_two() { (count + block - 1) >> block.trailing_zeros() } else { count.div_ceil(block) }
     }
 
     /// Expected cost of making a node of `count` spheres a leaf.

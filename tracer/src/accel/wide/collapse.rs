@@ -11,7 +11,7 @@
 use super::leaf::Block;
 use super::node::{ChildRef, WideNode};
 use crate::accel::bvh::builder::BuiltTree;
-use crate::geometry::{Aabb, Sphere};
+use crate::geometry::Aabb;
 
 /// A wide tree: nodes (the root first, depth-first) and the blocks their leaves refer to.
 #[derive(Clone, Debug)]
@@ -22,8 +22,8 @@ pub struct Tree<const W: usize, const B: usize> {
     pub blocks: Vec<Block<B>>,
 }
 
-/// Collapses `built` (a tree over `spheres`) into a `W`-wide tree with leaves in blocks of `B`.
-pub fn collapse<const W: usize, const B: usize>(built: &BuiltTree, spheres: &[Sphere]) -> Tree<W, B> {
+/// Collapses `built` into a `W`-wide tree with leaves in blocks of `B`.
+pub fn collapse<const W: usize, const B: usize>(built: &BuiltTree) -> Tree<W, B> {
     // Sphere count and first position in the primitive order of every binary subtree (children follow parents).
     let n = built.nodes.len();
     let (mut count, mut start) = (vec![0u32; n], vec![0u32; n]);
@@ -36,15 +36,15 @@ pub fn collapse<const W: usize, const B: usize>(built: &BuiltTree, spheres: &[Sp
             (count[i], start[i]) = (count[f] + count[f + 1], start[f]);
         }
     }
-    let blocks = Vec::with_capacity(spheres.len().div_ceil(B) + spheres.len() / 2);
-    let mut c = Collapser::<W, B> { built, spheres, count, start, tree: Tree { nodes: Vec::new(), blocks } };
+    let spheres = built.prim_order.len();
+    let blocks = Vec::with_capacity(spheres.div_ceil(B) + spheres / 2);
+    let mut c = Collapser::<W, B> { built, count, start, tree: Tree { nodes: Vec::new(), blocks } };
     c.node(0);
     c.tree
 }
 
 struct Collapser<'a, const W: usize, const B: usize> {
     built: &'a BuiltTree,
-    spheres: &'a [Sphere],
     count: Vec<u32>,
     start: Vec<u32>,
     tree: Tree<W, B>,
@@ -60,31 +60,32 @@ impl<const W: usize, const B: usize> Collapser<'_, W, B> {
     fn node(&mut self, b: usize) -> u32 {
         let index = self.tree.nodes.len();
         self.tree.nodes.push(WideNode::EMPTY);
-        let mut kids = Vec::with_capacity(W);
+        // The gathered binary nodes, `kids[..len]`, in left-to-right order.
+        let (mut kids, mut len) = ([0usize; W], 0);
         if self.count[b] > 0 {
-            kids.push(b);
+            (kids[0], len) = (b, 1);
         }
-        while kids.len() < W {
+        while len < W {
             let mut best: Option<(usize, f32)> = None;
-            for (i, &k) in kids.iter().enumerate() {
-                let area = self.built.nodes[k].bounds.surface_area();
-                if self.openable(k) && best.is_none_or(|(_, a)| area > a) {
-                    best = Some((i, area));
+            for (i, &k) in kids[..len].iter().enumerate() {
+                if self.openable(k) {
+                    let area = self.built.nodes[k].bounds.surface_area();
+                    if best.is_none_or(|(_, a)| area > a) {
+                        best = Some((i, area));
+                    }
                 }
             }
             let Some((i, _)) = best else { break };
             let first = self.built.nodes[kids[i]].first as usize;
-            kids[i] = first;
-            kids.insert(i + 1, first + 1);
+            kids.copy_within(i + 1..len, i + 2);
+            (kids[i], kids[i + 1], len) = (first, first + 1, len + 1);
         }
-        let children: Vec<(ChildRef, Aabb)> = kids
-            .into_iter()
-            .map(|k| {
-                let child = if self.openable(k) { ChildRef::node(self.node(k)) } else { self.leaf(k) };
-                (child, self.built.nodes[k].bounds)
-            })
-            .collect();
-        self.tree.nodes[index] = WideNode::new(&children);
+        let mut children = [(ChildRef::EMPTY, Aabb::EMPTY); W];
+        for (slot, &k) in children.iter_mut().zip(&kids[..len]) {
+            let child = if self.openable(k) { ChildRef::node(self.node(k)) } else { self.leaf(k) };
+            *slot = (child, self.built.nodes[k].bounds);
+        }
+        self.tree.nodes[index] = WideNode::new(&children[..len]);
         index as u32
     }
 
@@ -92,8 +93,12 @@ impl<const W: usize, const B: usize> Collapser<'_, W, B> {
     fn leaf(&mut self, b: usize) -> ChildRef {
         let (start, count) = (self.start[b] as usize, self.count[b] as usize);
         let first = self.tree.blocks.len() as u32;
-        let ids = &self.built.prim_order[start..start + count];
-        let blocks = Block::append(&mut self.tree.blocks, self.spheres, ids);
+        let range = start..start + count;
+        let blocks = Block::append(
+            &mut self.tree.blocks,
+            &self.built.ordered_spheres[range.clone()],
+            &self.built.prim_order[range],
+        );
         ChildRef::leaf(first, blocks as u32)
     }
 }
@@ -102,11 +107,12 @@ impl<const W: usize, const B: usize> Collapser<'_, W, B> {
 mod tests {
     use super::*;
     use crate::accel::bvh::{BvhParams, Split, builder};
+    use crate::geometry::Sphere;
     use crate::scene::SceneKind;
 
     fn check<const W: usize, const B: usize>(spheres: &[Sphere], params: &BvhParams) {
         let built = builder::build(spheres, params);
-        let tree = collapse::<W, B>(&built, spheres);
+        let tree = collapse::<W, B>(&built);
         let mut seen = vec![0u32; spheres.len()];
         let mut leaves = 0;
         for (i, node) in tree.nodes.iter().enumerate() {
@@ -120,7 +126,10 @@ mod tests {
                     leaves += 1;
                     let blocks = &tree.blocks[child.blocks()];
                     let real: usize = blocks.iter().map(Block::len).sum();
-                    assert!(real <= (params.leaf_size as usize).max(B) && blocks.len() == real.div_ceil(B), "blocks filled");
+                    assert!(
+                        real <= (params.leaf_size as usize).max(B) && blocks.len() == real.div_ceil(B),
+                        "blocks filled"
+                    );
                     for block in blocks {
                         for l in 0..block.len() {
                             let id = block.ids[l];
@@ -159,7 +168,7 @@ mod tests {
     fn nodes_fill_up_until_only_leaves_are_left() {
         let spheres = SceneKind::RandomSpheres.generate(5000, 1).spheres;
         let built = builder::build(&spheres, &BvhParams { leaf_size: 1, ..BvhParams::default() });
-        let tree = collapse::<8, 4>(&built, &spheres);
+        let tree = collapse::<8, 4>(&built);
         for node in &tree.nodes {
             assert!(node.len() == 8 || node.children[..node.len()].iter().all(|c| c.is_leaf()), "{node:?}");
         }

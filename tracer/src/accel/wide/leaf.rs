@@ -27,14 +27,15 @@ const _: () = assert!(std::mem::size_of::<Block<8>>() == 160 && std::mem::size_o
 
 impl<const B: usize> Block<B> {
     /// A block of padding only.
-    pub const PADDING: Self = Self { cx: [f32::NAN; B], cy: [f32::NAN; B], cz: [f32::NAN; B], r2: [f32::NAN; B], ids: [PAD; B] };
+    pub const PADDING: Self =
+        Self { cx: [f32::NAN; B], cy: [f32::NAN; B], cz: [f32::NAN; B], r2: [f32::NAN; B], ids: [PAD; B] };
 
-    /// Appends blocks holding `ids` (spheres of `spheres`), the last one padded; returns how many.
+    /// Appends blocks holding `spheres` (whose scene indices are `ids`), the last one padded; returns how many.
     pub fn append(out: &mut Vec<Self>, spheres: &[Sphere], ids: &[u32]) -> usize {
-        for chunk in ids.chunks(B) {
+        assert_eq!(spheres.len(), ids.len());
+        for (spheres, ids) in spheres.chunks(B).zip(ids.chunks(B)) {
             let mut block = Self::PADDING;
-            for (lane, &id) in chunk.iter().enumerate() {
-                let s = &spheres[id as usize];
+            for (lane, (s, &id)) in spheres.iter().zip(ids).enumerate() {
                 block.cx[lane] = s.center.x;
                 block.cy[lane] = s.center.y;
                 block.cz[lane] = s.center.z;
@@ -68,8 +69,9 @@ mod tests {
     fn blocks_are_filled_in_order_and_padded() {
         let spheres: Vec<Sphere> = (0..11).map(|i| Sphere::new(Vec3::splat(i as f32), 0.5 + i as f32)).collect();
         let ids: Vec<u32> = (0..11).rev().collect();
+        let ordered: Vec<Sphere> = ids.iter().map(|&i| spheres[i as usize]).collect();
         let mut blocks = Vec::new();
-        assert_eq!(Block::<4>::append(&mut blocks, &spheres, &ids), 3);
+        assert_eq!(Block::<4>::append(&mut blocks, &ordered, &ids), 3);
         assert_eq!(blocks.iter().map(Block::len).collect::<Vec<_>>(), [4, 4, 3]);
         assert_eq!(blocks[0].ids, [10, 9, 8, 7]);
         assert_eq!((blocks[2].cx[2], blocks[2].r2[2]), (0.0, 0.25));

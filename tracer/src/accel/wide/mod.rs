@@ -63,14 +63,14 @@ impl WideBvh {
     pub fn try_build(spheres: &[Sphere], bvh: &BvhParams, wide: &WideParams) -> Result<Self, ParamError> {
         bvh.validate()?;
         wide.validate()?;
-        let built = builder::build_in_blocks(spheres, bvh, wide.leaf_block);
+        let built = builder::build_for_blocks(spheres, bvh, wide.leaf_block);
         let layout = match (wide.width, wide.leaf_block) {
-            (4, 4) => Layout::W4B4(collapse(&built, spheres)),
-            (4, 8) => Layout::W4B8(collapse(&built, spheres)),
-            (4, _) => Layout::W4B16(collapse(&built, spheres)),
-            (_, 4) => Layout::W8B4(collapse(&built, spheres)),
-            (_, 8) => Layout::W8B8(collapse(&built, spheres)),
-            _ => Layout::W8B16(collapse(&built, spheres)),
+            (4, 4) => Layout::W4B4(collapse(&built)),
+            (4, 8) => Layout::W4B8(collapse(&built)),
+            (4, _) => Layout::W4B16(collapse(&built)),
+            (_, 4) => Layout::W8B4(collapse(&built)),
+            (_, 8) => Layout::W8B8(collapse(&built)),
+            _ => Layout::W8B16(collapse(&built)),
         };
         let stats = match &layout {
             Layout::W4B4(t) => stats(t),
@@ -219,7 +219,8 @@ fn stats<const W: usize, const B: usize>(tree: &Tree<W, B>) -> TreeStats {
                 s.leaves += 1;
                 s.depth = s.depth.max(depth + 1);
                 let spheres: usize = tree.blocks[child.blocks()].iter().map(leaf::Block::len).sum();
-                s.sah_cost += sah::leaf_cost(spheres) as f64 * node.child_bounds(lane).surface_area() as f64 / root_area;
+                s.sah_cost +=
+                    sah::leaf_cost(spheres) as f64 * node.child_bounds(lane).surface_area() as f64 / root_area;
             }
         }
     }

@@ -1,5 +1,7 @@
 //! A wide node: the boxes of up to `W` children stored per axis (SoA), their references and octant orders.
 
+use glam::Vec3;
+
 use crate::geometry::Aabb;
 
 /// A reference to a wide node's child: an interior node, a leaf (a run of leaf blocks) or nothing.
@@ -84,8 +86,18 @@ const _: () = assert!(std::mem::size_of::<WideNode<4>>() == 128 && std::mem::siz
 
 impl<const W: usize> WideNode<W> {
     /// A node without children.
-    pub const EMPTY: Self =
-        Self { bounds: [[f32::INFINITY; W], [f32::NEG_INFINITY; W], [f32::INFINITY; W], [f32::NEG_INFINITY; W], [f32::INFINITY; W], [f32::NEG_INFINITY; W]], children: [ChildRef::EMPTY; W], octant_orders: [0; W] };
+    pub const EMPTY: Self = Self {
+        bounds: [
+            [f32::INFINITY; W],
+            [f32::NEG_INFINITY; W],
+            [f32::INFINITY; W],
+            [f32::NEG_INFINITY; W],
+            [f32::INFINITY; W],
+            [f32::NEG_INFINITY; W],
+        ],
+        children: [ChildRef::EMPTY; W],
+        octant_orders: [0; W],
+    };
 
     /// A node of `children` (at most `W`) with their boxes, octant orders precomputed.
     pub fn new(children: &[(ChildRef, Aabb)]) -> Self {
@@ -98,16 +110,17 @@ impl<const W: usize> WideNode<W> {
                 node.bounds[2 * axis + 1][lane] = b.max[axis];
             }
         }
+        let centers: [Vec3; W] = std::array::from_fn(|lane| children.get(lane).map_or(Vec3::ZERO, |(_, b)| b.center()));
         for octant in 0..8 {
             // Sort lanes by box center along the octant's diagonal; empty lanes last; ties in stored order.
             let sign = |axis: usize| if octant >> axis & 1 == 1 { -1.0 } else { 1.0 };
-            let key = |lane: usize| match children.get(lane) {
-                Some((_, b)) => (0, (0..3).map(|a| b.center()[a] * sign(a)).sum::<f32>()),
-                None => (1, 0.0),
-            };
-            let mut lanes: Vec<usize> = (0..W).collect();
-            lanes.sort_by(|&x, &y| {
-                let (kx, ky) = (key(x), key(y));
+            let keys: [(u8, f32); W] = std::array::from_fn(|lane| match lane < children.len() {
+                true => (0, (0..3).map(|a| centers[lane][a] * sign(a)).sum::<f32>()),
+                false => (1, 0.0),
+            });
+            let mut lanes: [usize; W] = std::array::from_fn(|lane| lane);
+            lanes.sort_unstable_by(|&x, &y| {
+                let (kx, ky) = (keys[x], keys[y]);
                 kx.0.cmp(&ky.0).then(kx.1.total_cmp(&ky.1)).then(x.cmp(&y))
             });
             for (i, lane) in lanes.into_iter().enumerate() {
@@ -167,7 +180,8 @@ mod tests {
     #[test]
     fn octant_orders_sort_children_along_the_diagonal() {
         let unit = |x: f32| Aabb { min: Vec3::new(x, 0.0, 0.0), max: Vec3::new(x + 1.0, 1.0, 1.0) };
-        let children = [(ChildRef::node(1), unit(5.0)), (ChildRef::node(2), unit(-5.0)), (ChildRef::node(3), unit(0.0))];
+        let children =
+            [(ChildRef::node(1), unit(5.0)), (ChildRef::node(2), unit(-5.0)), (ChildRef::node(3), unit(0.0))];
         let node = WideNode::<4>::new(&children);
         assert_eq!(node.len(), 3);
         assert_eq!(node.child_bounds(1), unit(-5.0));

@@ -33,17 +33,27 @@ pub struct Bins {
     right_area: Vec<f32>,
 }
 
+/// Bin of each axis for a centroid `c`: `((c - min) * scale) as usize`, at most `last` (NaN, from an infinite
+/// scale on a zero offset, goes to bin 0, as `as usize` puts it).
+#[inline(always)]
+fn bin_index(c: Vec3A, min: Vec3A, scale: Vec3A, last: Vec3A) -> [usize; 3] {
+    // Clamped in floats first (`max` returns its argument for NaN), the truncation needs no saturation.
+    let f = ((c - min) * scale).max(Vec3A::ZERO).min(last);
+    // SAFETY: every lane is finite and in [0, last], so it truncates to a u32 exactly.
+    f.to_array().map(|x| unsafe { x.to_int_unchecked::<u32>() } as usize)
+}
+
 /// Bins every primitive on the three axes in one pass; axes of zero `scale` put everything in their first bin.
 #[inline]
 fn bin_all(bins: &mut [Bin], bin_count: usize, refs: &[PrimRef], min: Vec3A, scale: Vec3A) {
     let (bx, rest) = bins.split_at_mut(bin_count);
     let (by, bz) = rest.split_at_mut(bin_count);
-    let last = bin_count - 1;
+    let last = Vec3A::splat((bin_count - 1) as f32);
     for r in refs {
-        let f = (r.centroid - min) * scale;
-        bx[(f.x as usize).min(last)].add(&r.bounds);
-        by[(f.y as usize).min(last)].add(&r.bounds);
-        bz[(f.z as usize).min(last)].add(&r.bounds);
+        let ([x, y, z], b) = (bin_index(r.centroid(), min, scale, last), r.bounds());
+        bx[x].add(&b);
+        by[y].add(&b);
+        bz[z].add(&b);
     }
 }
 
@@ -78,7 +88,7 @@ fn best_plane(
     for b in (1..bins.len()).rev() {
         if bins[b].count > 0 {
             acc.add(&bins[b].bounds);
-            area = acc.surface_area();
+            area = acc.surface_area_of_nonempty();
         }
         right_area[b] = area;
     }
@@ -93,7 +103,7 @@ fn best_plane(
         if right_count == 0 {
             break;
         }
-        let key = costs.split_key(left.surface_area(), left_count, right_area[b], right_count);
+        let key = costs.split_key(left.surface_area_of_nonempty(), left_count, right_area[b], right_count);
         if let Some(c) = best
             && !(key < c.key)
         {
@@ -122,12 +132,13 @@ pub fn split(
     let parent_area = node.bounds.surface_area();
     let scale =
         Vec3A::from_array(std::array::from_fn(|a| if extent[a] > 0.0 { bin_count as f32 / extent[a] } else { 0.0 }));
+    let (min, last) = (Vec3A::from(cb.min), Vec3A::splat((bin_count - 1) as f32));
     if scratch.bins.len() != 3 * bin_count {
         scratch.bins.resize(3 * bin_count, Bin::EMPTY);
         scratch.right_area.resize(bin_count, 0.0);
     }
     scratch.bins.fill(Bin::EMPTY);
-    bin_all(&mut scratch.bins, bin_count, refs, cb.min.into(), scale);
+    bin_all(&mut scratch.bins, bin_count, refs, min, scale);
     let mut best = None;
     for axis in (0..3).filter(|&a| extent[a] > 0.0) {
         let bins = &scratch.bins[axis * bin_count..(axis + 1) * bin_count];
@@ -144,14 +155,29 @@ pub fn split(
     for (i, bin) in bins.iter().enumerate() {
         sides[(i >= first_right) as usize].add(&bin.bounds);
     }
-    let (min, s, last) = (cb.min[axis], scale[axis], bin_count - 1);
     let mut centroids = [Box3A::EMPTY; 2];
     let n = partition(prims, refs, |r| {
-        let c = r.centroid[axis];
-        let left = (((c - min) * s) as usize).min(last) < first_right;
-        centroids[!left as usize].grow(r.centroid);
+        let c = r.centroid();
+        let left = bin_index(c, min, scale, last)[axis] < first_right;
+        centroids[!left as usize].grow(c);
         left
     });
     let children = [0, 1].map(|i| NodeBounds { bounds: sides[i].aabb(), centroids: centroids[i].aabb() });
     (proper(n, prims.len()), Some(children))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bin_index_is_the_saturating_conversion_clamped_to_the_last_bin() {
+        let (min, last) = (Vec3A::ZERO, Vec3A::splat(15.0));
+        let reference = |f: f32| (f as usize).min(15);
+        for f in [0.0, 0.99, 1.0, 7.5, 14.999, 15.0, 16.0, 1e30, f32::INFINITY, f32::NAN] {
+            // Scale 1 gives `f` itself; a NaN or infinite product comes from an infinite scale.
+            let got = bin_index(Vec3A::new(f, 0.0, 1.0), min, Vec3A::new(1.0, f32::INFINITY, f32::INFINITY), last);
+            assert_eq!(got, [reference(f), reference(f32::NAN), reference(f32::INFINITY)], "{f}");
+        }
+    }
 }

@@ -9,6 +9,6 @@ pub fn split(node: &NodeView<'_>, prims: &mut [u32], refs: &mut [PrimRef]) -> De
     }
     let axis = node.centroid_bounds.longest_axis();
     let mid = node.centroid_bounds.center()[axis];
-    let n = partition(prims, refs, |r| r.centroid[axis] < mid);
+    let n = partition(prims, refs, |r| r.centroid()[axis] < mid);
     proper(n, prims.len())
 }

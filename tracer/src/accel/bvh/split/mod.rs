@@ -55,8 +55,8 @@ impl NodeBounds {
     pub fn of(refs: &[PrimRef]) -> Self {
         let (mut bounds, mut centroids) = (Box3A::EMPTY, Box3A::EMPTY);
         for r in refs {
-            bounds.add(&r.bounds);
-            centroids.grow(r.centroid);
+            bounds.add(&r.bounds());
+            centroids.grow(r.centroid());
         }
         NodeBounds { bounds: bounds.aabb(), centroids: centroids.aabb() }
     }
