@@ -1,6 +1,6 @@
 //! `harness list`: every name a config or the command line accepts.
 
-use schema::{Accel, Axis, Named, ObvhsQuality, PeerKind, SceneName, Workload};
+use schema::{Accel, Axis, Named, ObvhsQuality, PacketSize, PeerKind, SceneName, Workload};
 use tracer::accel::wide::{ChildOrdering, Kernel};
 use tracer::accel::{Split, Traversal, WideParams};
 use tracer::executor::StrategyKind;
@@ -46,6 +46,14 @@ pub fn run() {
         here.join(", ")
     );
     line("orders", &ChildOrdering::ALL);
-    println!("{:<12} {} (wide-bvh {}; ray sets only)", "packets", ints(&WideParams::PACKETS), Axis::packet_size.key());
+    println!(
+        "{:<12} {} (wide-bvh {}; {} {}, default {}; ray sets only)",
+        "packets",
+        ints(&WideParams::PACKETS),
+        Axis::packet_size.key(),
+        PeerKind::EmbreePackets.name(),
+        PacketSize::embree_allowed(),
+        PacketSize::EMBREE_DEFAULT
+    );
     println!("{:<12} {} logical cores on this machine", "threads", crate::render::available_threads());
 }

@@ -77,10 +77,11 @@ declare_columns! {
         simd_kernel: Option<Kernel> = Some(WideParams::default().kernel), applies wide else None, added 2;
         /// Order in which the wide BVH visits a node's children: stored, nearest entry first, or by ray octant.
         child_order: Option<ChildOrdering> = Some(WideParams::default().order), applies wide else None, added 2;
-        /// Rays the wide BVH traces together in a ray set: 1 (one at a time), or packets of 8 or 16 with an active
-        /// mask (renders trace one ray at a time).
-        packet_size: Option<PacketSize> = Some(PacketSize(WideParams::default().packet)), applies wide_ray_set else None,
-            added 4, unit "rays";
+        /// Rays traced together in a ray set (renders trace one ray at a time): the wide BVH 1 (one at a time), or
+        /// packets of 8 or 16 with an active mask; `embree-packets` 8 (`rtcIntersect8`) or 16 (`rtcIntersect16`, its
+        /// default).
+        packet_size: Option<PacketSize> = Some(PacketSize(WideParams::default().packet)), applies packet_ray_set else None,
+            default_for embree_packets = Some(PacketSize::EMBREE_DEFAULT), added 4, unit "rays";
     }
     measures {
         /// Wall time of the backend's one-time start-up in the process that times the configuration: thread pool,
@@ -221,9 +222,14 @@ fn wide(s: &Settings) -> bool {
     s.accel.is_wide()
 }
 
-/// Packets are for ray sets: renders trace one ray at a time.
-fn wide_ray_set(s: &Settings) -> bool {
-    s.accel.is_wide() && s.workload != Workload::Render
+/// Packets are for ray sets of the wide BVH and Embree's packet queries: renders trace one ray at a time.
+fn packet_ray_set(s: &Settings) -> bool {
+    (s.accel.is_wide() || embree_packets(s)) && s.workload != Workload::Render
+}
+
+/// Embree's packet queries (16 rays unless told 8).
+fn embree_packets(s: &Settings) -> bool {
+    s.accel == Accel::Peer(PeerKind::EmbreePackets)
 }
 
 /// Only the binned SAH split has bins.

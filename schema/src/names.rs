@@ -73,7 +73,7 @@ named_enum! {
         ObvhsCwbvh = "obvhs-cwbvh",
         /// Embree 4 queried one ray at a time (`rtcIntersect1` / `rtcOccluded1`).
         Embree = "embree",
-        /// Embree 4 queried 16 rays at a time (`rtcIntersect16`).
+        /// Embree 4 queried in packets of 16 rays (`rtcIntersect16`) or 8 (`rtcIntersect8`), by `packet_size`.
         EmbreePackets = "embree-packets",
     }
 }
@@ -223,8 +223,21 @@ int_choice! {
 }
 
 int_choice! {
-    /// Rays the wide BVH traces together in a batch (`WideParams::PACKETS`).
+    /// Rays the wide BVH traces together in a batch (`WideParams::PACKETS`), or Embree's packet queries
+    /// ([`PacketSize::EMBREE`]).
     PacketSize = WideParams::PACKETS
+}
+
+impl PacketSize {
+    /// The packet sizes `embree-packets` takes: 8 (`rtcIntersect8`) and 16 (`rtcIntersect16`).
+    pub const EMBREE: &'static [u32] = &[8, 16];
+    /// `embree-packets`' packet size where the configuration names none (what it traced before it had the setting).
+    pub const EMBREE_DEFAULT: PacketSize = PacketSize(16);
+
+    /// [`PacketSize::EMBREE`] in words, for "allowed: …" messages.
+    pub fn embree_allowed() -> String {
+        Self::EMBREE.iter().map(u32::to_string).collect::<Vec<_>>().join(", ")
+    }
 }
 
 /// Where a configuration's spheres come from.

@@ -11,7 +11,7 @@ pub mod shard;
 use std::collections::HashSet;
 use std::sync::Arc;
 
-use schema::{Axis, AxisValue, SceneName, Settings, Threads};
+use schema::{Axis, AxisValue, Named, PacketSize, PeerKind, SceneName, Settings, Threads};
 use tracer::accel::wide::Kernel;
 use tracer::scene::{Scene, sphere_file};
 
@@ -106,6 +106,39 @@ fn check_kernels(file: &str, configurations: &[Configuration]) -> Result<(), Err
     )))
 }
 
+/// Refuses a packet size `embree-packets` cannot trace (before anything is written): it takes 8 (`rtcIntersect8`)
+/// or 16 (`rtcIntersect16`), not the wide BVH's 1. Checked on the configured value (`values`; normalization gives
+/// a configuration that names none 16), with the key path of the series (`index`) or sweep that names it.
+fn check_embree_packets(
+    file: &str,
+    exp: &Experiment,
+    (index, series): (usize, &Series),
+    values: &[AxisValue],
+    configured: &Settings,
+) -> Result<(), Error> {
+    let axis = Axis::packet_size;
+    if configured.peer() != Some(PeerKind::EmbreePackets) || !configured.applies(axis) {
+        return Ok(());
+    }
+    let (path, list) = match (series.fixed.get(&axis), exp.sweep.get(&axis)) {
+        (Some(list), _) => (format!("series[{index}].{}", axis.key()), list),
+        (None, Some(list)) => (format!("sweep.{}", axis.key()), list),
+        (None, None) => return Ok(()),
+    };
+    let value = &values[Axis::ALL.iter().position(|a| *a == axis).expect("packet_size is an axis")];
+    match value {
+        AxisValue::packet_size(Some(size)) if !PacketSize::EMBREE.contains(&size.0) => {
+            let i = list.iter().position(|v| v == value).unwrap_or(0);
+            Err(Error::Input(format!(
+                "{file}: {path}[{i}]: {size} is not allowed with accel {} (allowed there: {})",
+                PeerKind::EmbreePackets.name(),
+                PacketSize::embree_allowed()
+            )))
+        }
+        _ => Ok(()),
+    }
+}
+
 impl Plan {
     /// Plans `exp` for a machine with `cores` logical cores; reads the sphere file if the sweep names one.
     pub fn new(exp: &Experiment, cores: usize) -> Result<Plan, Error> {
@@ -131,7 +164,7 @@ impl Plan {
         let mut configurations = Vec::new();
         let mut seen = HashSet::new();
         let mut above_cores = Vec::new();
-        for s in series {
+        for (index, s) in series.iter().enumerate() {
             let lists: Vec<Vec<AxisValue>> = Axis::ALL
                 .iter()
                 .map(|a| s.fixed.get(a).or(exp.sweep.get(a)).cloned().unwrap_or_else(|| vec![a.default_value()]))
@@ -147,6 +180,7 @@ impl Plan {
                     continue;
                 }
                 let configured = settings(&values, sphere_file.as_ref());
+                check_embree_packets(&file, exp, (index, s), &values, &configured)?;
                 // The id is the configured settings' (machine-independent); the run resolves `all` here.
                 let id = schema::row::config_id(&s.label, &configured);
                 if seen.insert(id.clone()) {
@@ -197,6 +231,7 @@ mod tests {
 
     use super::*;
     use crate::config::Experiment;
+    use schema::Workload;
 
     fn plan(text: &str) -> Plan {
         Plan::new(&Experiment::parse(Path::new("t.toml"), text).unwrap(), 2).unwrap()
@@ -249,6 +284,45 @@ mod tests {
         assert_ne!(a.configurations[0].id, c.configurations[0].id);
         // Pinned: the id of the default configuration at 10 spheres, as recorded since the first row format.
         assert_eq!(a.configurations[0].id, schema::row::config_id("default", &a.configurations[0].settings));
+    }
+
+    #[test]
+    fn embree_packets_trace_16_unless_told_8_and_keep_their_ids() {
+        let embree = PeerKind::EmbreePackets.name();
+        let p = plan(&format!(
+            "{BASE}[sweep]\nworkload = [\"render\", \"primary\"]\n[[series]]\nlabel = \"e\"\naccel = \"{embree}\"\n\
+             [[series]]\nlabel = \"e8\"\naccel = \"{embree}\"\npacket_size = 8\n\
+             [[series]]\nlabel = \"e16\"\naccel = \"{embree}\"\npacket_size = 16\n"
+        ));
+        let config = |label: &str, render: bool| {
+            let c = p
+                .configurations
+                .iter()
+                .find(|c| c.series == label && (c.settings.workload == Workload::Render) == render);
+            c.unwrap().clone()
+        };
+        for label in ["e", "e8", "e16"] {
+            assert_eq!(config(label, true).settings.packet_size, None, "{label}: renders trace one ray at a time");
+        }
+        assert_eq!(config("e", false).settings.packet_size, Some(PacketSize::EMBREE_DEFAULT));
+        assert_eq!(config("e8", false).settings.packet_size, Some(PacketSize(8)));
+        // The default 16 stays out of the id, so configurations recorded before embree-packets had packet_size (as
+        // not applicable, `0`) keep their ids; 8 is a configuration of its own.
+        let e = config("e", false);
+        let before = Settings { packet_size: None, ..e.settings.clone() };
+        assert_eq!(e.id, schema::row::config_id("e", &before));
+        assert_eq!(before.normalized(), e.settings, "a row recorded before reads back as 16");
+        let e8 = config("e8", false);
+        assert_ne!(
+            e8.id,
+            schema::row::config_id("e8", &Settings { packet_size: Some(PacketSize(16)), ..e8.settings.clone() })
+        );
+        // The id skips only this accel's default: the wide BVH's packets of 16 join the id as before.
+        let wide = Settings { accel: schema::Accel::Ours(AccelKind::WideBvh), ..e.settings.clone() };
+        assert_ne!(
+            schema::row::config_id("w", &wide),
+            schema::row::config_id("w", &Settings { packet_size: Some(PacketSize(1)), ..wide.clone() })
+        );
     }
 
     #[test]

@@ -7,31 +7,76 @@ use tracer::render::PrimaryHits;
 
 use crate::error::Error;
 use crate::peers::{EmbreeConfig, EmbreeDevice, EmbreeSpheres, ObvhsBvh2, ObvhsCwbvh, PeerKind};
-use schema::Settings;
+use schema::{PacketSize, Settings};
 
-/// Embree queried 16 rays at a time (`rtcIntersect16`) for closest hits; occlusion stays `rtcOccluded1`.
-pub struct EmbreePackets(pub EmbreeSpheres);
+/// Embree queried in packets for closest hits, `rtcIntersect8` or `rtcIntersect16` (`packet_size`); occlusion stays
+/// `rtcOccluded1`.
+pub struct EmbreePackets {
+    pub scene: EmbreeSpheres,
+    pub width: EmbreePacketWidth,
+}
 
-impl Accelerator for EmbreePackets {
-    fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
-        self.0.intersect(ray, counters)
+/// The lanes of `embree-packets`' queries (`packet_size`, [`PacketSize::EMBREE`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EmbreePacketWidth {
+    /// `rtcIntersect8`.
+    Eight,
+    /// `rtcIntersect16`.
+    Sixteen,
+}
+
+impl EmbreePacketWidth {
+    /// The width `settings` give `embree-packets` (normalized settings hold 8 or 16; anything else is an error).
+    pub fn of(settings: &Settings) -> Result<Self, Error> {
+        match settings.packet_size.unwrap_or(PacketSize::EMBREE_DEFAULT) {
+            PacketSize(8) => Ok(EmbreePacketWidth::Eight),
+            PacketSize(16) => Ok(EmbreePacketWidth::Sixteen),
+            PacketSize(n) => Err(Error::Run(format!(
+                "embree-packets: packet_size {n} is not allowed (allowed: {})",
+                PacketSize::embree_allowed()
+            ))),
+        }
     }
+}
 
-    fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
-        self.0.occluded(ray, counters)
-    }
-
-    fn stats(&self) -> TreeStats {
-        self.0.stats()
-    }
-
-    fn intersect_batch<C: Counters>(&self, rays: &[Ray], out: &mut [Hit], counters: &mut C) {
-        for (rays, out) in rays.chunks(16).zip(out.chunks_mut(16)) {
-            let hits = self.0.intersect16(rays);
+impl EmbreePackets {
+    /// Traces `rays` in packets of N with `query` (one of the scene's `intersectN`), no allocation.
+    #[inline(always)]
+    fn batch<const N: usize, C: Counters>(
+        &self,
+        query: impl Fn(&EmbreeSpheres, &[Ray]) -> [Option<Hit>; N],
+        rays: &[Ray],
+        out: &mut [Hit],
+        counters: &mut C,
+    ) {
+        for (rays, out) in rays.chunks(N).zip(out.chunks_mut(N)) {
+            let hits = query(&self.scene, rays);
             for (o, h) in out.iter_mut().zip(hits) {
                 counters.ray();
                 *o = h.unwrap_or(PrimaryHits::MISS);
             }
+        }
+    }
+}
+
+impl Accelerator for EmbreePackets {
+    fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
+        self.scene.intersect(ray, counters)
+    }
+
+    fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
+        self.scene.occluded(ray, counters)
+    }
+
+    fn stats(&self) -> TreeStats {
+        self.scene.stats()
+    }
+
+    fn intersect_batch<C: Counters>(&self, rays: &[Ray], out: &mut [Hit], counters: &mut C) {
+        // The width is chosen once per batch; each arm is its own monomorphized loop.
+        match self.width {
+            EmbreePacketWidth::Eight => self.batch(EmbreeSpheres::intersect8, rays, out, counters),
+            EmbreePacketWidth::Sixteen => self.batch(EmbreeSpheres::intersect16, rays, out, counters),
         }
     }
 }
@@ -102,12 +147,12 @@ impl Backend {
             PeerKind::Embree | PeerKind::EmbreePackets => {
                 let device = setup.embree.as_ref().expect("an Embree configuration's setup starts a device");
                 let quality = settings.embree_build.unwrap_or_default();
+                let width = (peer == PeerKind::EmbreePackets).then(|| EmbreePacketWidth::of(settings)).transpose()?;
                 let scene =
                     EmbreeSpheres::build(device, spheres, quality).map_err(|e| Error::Run(format!("embree: {e}")))?;
-                if peer == PeerKind::Embree {
-                    Backend::Embree(scene)
-                } else {
-                    Backend::EmbreePackets(EmbreePackets(scene))
+                match width {
+                    None => Backend::Embree(scene),
+                    Some(width) => Backend::EmbreePackets(EmbreePackets { scene, width }),
                 }
             }
         })
@@ -149,7 +194,7 @@ impl Backend {
         match self {
             Backend::Ours(_) => "-".into(),
             Backend::ObvhsBvh2(_) | Backend::ObvhsCwbvh(_) => "obvhs 0.4".into(),
-            Backend::Embree(s) | Backend::EmbreePackets(EmbreePackets(s)) => {
+            Backend::Embree(s) | Backend::EmbreePackets(EmbreePackets { scene: s, .. }) => {
                 let i = s.device_info();
                 let isa = match i.native_packet {
                     16 => "avx512",

@@ -102,46 +102,128 @@ pub struct RTCRayHit {
     pub hit: RTCHit,
 }
 
-/// `struct RTCRay16`: 16 rays as structure of arrays (768 bytes, align 64).
-#[repr(C, align(64))]
+/// `struct RTCRayN` (N = 8 or 16): N rays as structure of arrays, each field `[T; N]`, N × 48 bytes. Embree aligns
+/// the C struct to N × 4 bytes; here the packets [`RTCRayHit8`] and [`RTCRayHit16`] carry that alignment, and this
+/// part sits at their offset 0 (its size is a multiple of the alignment, so the hit part is aligned too).
+#[repr(C)]
 #[derive(Clone, Copy, Debug)]
-pub struct RTCRay16 {
-    pub org_x: [f32; 16],
-    pub org_y: [f32; 16],
-    pub org_z: [f32; 16],
-    pub tnear: [f32; 16],
-    pub dir_x: [f32; 16],
-    pub dir_y: [f32; 16],
-    pub dir_z: [f32; 16],
-    pub time: [f32; 16],
-    pub tfar: [f32; 16],
-    pub mask: [u32; 16],
-    pub id: [u32; 16],
-    pub flags: [u32; 16],
+pub struct RTCRayN<const N: usize> {
+    pub org_x: [f32; N],
+    pub org_y: [f32; N],
+    pub org_z: [f32; N],
+    pub tnear: [f32; N],
+    pub dir_x: [f32; N],
+    pub dir_y: [f32; N],
+    pub dir_z: [f32; N],
+    pub time: [f32; N],
+    pub tfar: [f32; N],
+    pub mask: [u32; N],
+    pub id: [u32; N],
+    pub flags: [u32; N],
 }
 
-/// `struct RTCHit16`: 16 hits as structure of arrays (576 bytes, align 64).
-#[repr(C, align(64))]
-#[derive(Clone, Copy, Debug)]
-pub struct RTCHit16 {
-    pub Ng_x: [f32; 16],
-    pub Ng_y: [f32; 16],
-    pub Ng_z: [f32; 16],
-    pub u: [f32; 16],
-    pub v: [f32; 16],
-    pub primID: [u32; 16],
-    pub geomID: [u32; 16],
-    pub instID: [[u32; 16]; 1],
-    pub instPrimID: [[u32; 16]; 1],
+impl<const N: usize> RTCRayN<N> {
+    /// N inactive lanes: harmless, well-formed rays (`tfar` = -inf, so nothing can be hit).
+    pub const INACTIVE: Self = Self {
+        org_x: [0.0; N],
+        org_y: [0.0; N],
+        org_z: [0.0; N],
+        tnear: [0.0; N],
+        dir_x: [0.0; N],
+        dir_y: [0.0; N],
+        dir_z: [1.0; N],
+        time: [0.0; N],
+        tfar: [-f32::INFINITY; N],
+        mask: [u32::MAX; N],
+        id: [0; N],
+        flags: [0; N],
+    };
 }
 
-/// `struct RTCRayHit16`: 16 rays and their hits (1344 bytes, align 64).
+/// `struct RTCHitN` (N = 8 or 16) of Embree 4.3+: N hits as structure of arrays, N × 36 bytes, with `instPrimID`
+/// (see [`RTCRayN`] for the alignment).
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct RTCHitN<const N: usize> {
+    pub Ng_x: [f32; N],
+    pub Ng_y: [f32; N],
+    pub Ng_z: [f32; N],
+    pub u: [f32; N],
+    pub v: [f32; N],
+    pub primID: [u32; N],
+    pub geomID: [u32; N],
+    pub instID: [[u32; N]; 1],
+    pub instPrimID: [[u32; N]; 1],
+}
+
+impl<const N: usize> RTCHitN<N> {
+    /// N empty hits (`geomID` = `RTC_INVALID_GEOMETRY_ID`).
+    pub const EMPTY: Self = Self {
+        Ng_x: [0.0; N],
+        Ng_y: [0.0; N],
+        Ng_z: [0.0; N],
+        u: [0.0; N],
+        v: [0.0; N],
+        primID: [RTC_INVALID_GEOMETRY_ID; N],
+        geomID: [RTC_INVALID_GEOMETRY_ID; N],
+        instID: [[RTC_INVALID_GEOMETRY_ID; N]],
+        instPrimID: [[RTC_INVALID_GEOMETRY_ID; N]],
+    };
+}
+
+/// `struct RTCRay8` (384 bytes; aligned to 32 inside [`RTCRayHit8`]).
+pub type RTCRay8 = RTCRayN<8>;
+/// `struct RTCHit8` (288 bytes; aligned to 32 inside [`RTCRayHit8`]).
+pub type RTCHit8 = RTCHitN<8>;
+/// `struct RTCRay16` (768 bytes; aligned to 64 inside [`RTCRayHit16`]).
+pub type RTCRay16 = RTCRayN<16>;
+/// `struct RTCHit16` (576 bytes; aligned to 64 inside [`RTCRayHit16`]).
+pub type RTCHit16 = RTCHitN<16>;
+
+/// `struct RTCRayHit8`: 8 rays and their hits (672 bytes, align 32), what `rtcIntersect8` takes.
+#[repr(C, align(32))]
+#[derive(Clone, Copy, Debug)]
+pub struct RTCRayHit8 {
+    pub ray: RTCRay8,
+    pub hit: RTCHit8,
+}
+
+/// `struct RTCRayHit16`: 16 rays and their hits (1344 bytes, align 64), what `rtcIntersect16` takes.
 #[repr(C, align(64))]
 #[derive(Clone, Copy, Debug)]
 pub struct RTCRayHit16 {
     pub ray: RTCRay16,
     pub hit: RTCHit16,
 }
+
+/// A packet `RTCRayHitN` of N lanes, aligned as `rtcIntersectN` requires: what the width-generic query code fills
+/// and reads.
+pub trait RTCRayHitN<const N: usize>: Copy {
+    /// N inactive lanes and empty hits.
+    const INACTIVE: Self;
+    /// The rays, to fill the active lanes.
+    fn ray_mut(&mut self) -> &mut RTCRayN<N>;
+    /// The rays (`tfar` is the hit distance after the query) and their hits.
+    fn parts(&self) -> (&RTCRayN<N>, &RTCHitN<N>);
+}
+
+macro_rules! ray_hit_n {
+    ($($packet:ident = $n:literal),+) => {$(
+        impl RTCRayHitN<$n> for $packet {
+            const INACTIVE: Self = Self { ray: RTCRayN::INACTIVE, hit: RTCHitN::EMPTY };
+            #[inline(always)]
+            fn ray_mut(&mut self) -> &mut RTCRayN<$n> {
+                &mut self.ray
+            }
+            #[inline(always)]
+            fn parts(&self) -> (&RTCRayN<$n>, &RTCHitN<$n>) {
+                (&self.ray, &self.hit)
+            }
+        }
+    )+};
+}
+
+ray_hit_n!(RTCRayHit8 = 8, RTCRayHit16 = 16);
 
 /// `struct RTCIntersectArguments` (32 bytes); `RTCOccludedArguments` has the same layout.
 #[repr(C)]
@@ -162,10 +244,14 @@ const _: () = assert!(size_of::<RTCHit>() == 48 && align_of::<RTCHit>() == 16);
 const _: () = assert!(size_of::<RTCRayHit>() == 96 && align_of::<RTCRayHit>() == 16);
 const _: () = assert!(std::mem::offset_of!(RTCRayHit, hit) == 48);
 const _: () = assert!(std::mem::offset_of!(RTCHit, instPrimID) == 32);
-const _: () = assert!(size_of::<RTCRay16>() == 768 && align_of::<RTCRay16>() == 64);
-const _: () = assert!(size_of::<RTCHit16>() == 576 && align_of::<RTCHit16>() == 64);
+const _: () = assert!(size_of::<RTCRay8>() == 384 && size_of::<RTCHit8>() == 288);
+const _: () = assert!(size_of::<RTCRayHit8>() == 384 + 288 && align_of::<RTCRayHit8>() == 32);
+const _: () = assert!(std::mem::offset_of!(RTCRayHit8, hit) == 384);
+const _: () = assert!(std::mem::offset_of!(RTCHit8, instPrimID) == 8 * 32);
+const _: () = assert!(size_of::<RTCRay16>() == 768 && size_of::<RTCHit16>() == 576);
 const _: () = assert!(size_of::<RTCRayHit16>() == 768 + 576 && align_of::<RTCRayHit16>() == 64);
 const _: () = assert!(std::mem::offset_of!(RTCRayHit16, hit) == 768);
+const _: () = assert!(std::mem::offset_of!(RTCHit16, instPrimID) == 16 * 32);
 const _: () = assert!(size_of::<RTCIntersectArguments>() == 32 && align_of::<RTCIntersectArguments>() == 8);
 
 /// `RTCErrorFunction`: `void (*)(void* userPtr, RTCError code, const char* str)`.
@@ -215,10 +301,10 @@ pub type FnReleaseGeometry = unsafe extern "C" fn(geometry: RTCGeometry);
 pub type FnIntersect1 = unsafe extern "C" fn(scene: RTCScene, rayhit: *mut RTCRayHit, args: *mut RTCIntersectArguments);
 /// `rtcOccluded1`.
 pub type FnOccluded1 = unsafe extern "C" fn(scene: RTCScene, ray: *mut RTCRay, args: *mut RTCOccludedArguments);
+/// `rtcIntersect8` / `rtcIntersect16` on the packet type `P` (`valid`: one `c_int` per lane).
+pub type FnIntersectN<P> =
+    unsafe extern "C" fn(valid: *const c_int, scene: RTCScene, rayhit: *mut P, args: *mut RTCIntersectArguments);
+/// `rtcIntersect8`.
+pub type FnIntersect8 = FnIntersectN<RTCRayHit8>;
 /// `rtcIntersect16`.
-pub type FnIntersect16 = unsafe extern "C" fn(
-    valid: *const c_int,
-    scene: RTCScene,
-    rayhit: *mut RTCRayHit16,
-    args: *mut RTCIntersectArguments,
-);
+pub type FnIntersect16 = FnIntersectN<RTCRayHit16>;

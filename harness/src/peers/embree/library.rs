@@ -121,6 +121,7 @@ pub struct Api {
     pub release_geometry: FnReleaseGeometry,
     pub intersect1: FnIntersect1,
     pub occluded1: FnOccluded1,
+    pub intersect8: FnIntersect8,
     pub intersect16: FnIntersect16,
 }
 
@@ -155,6 +156,7 @@ impl Api {
             release_geometry: sym!("rtcReleaseGeometry"),
             intersect1: sym!("rtcIntersect1"),
             occluded1: sym!("rtcOccluded1"),
+            intersect8: sym!("rtcIntersect8"),
             intersect16: sym!("rtcIntersect16"),
         })
     }

@@ -1,4 +1,4 @@
-//! A committed Embree scene of sphere points: single-ray and 16-wide packet queries.
+//! A committed Embree scene of sphere points: single-ray and 8- and 16-wide packet queries.
 
 use std::sync::Arc;
 
@@ -131,50 +131,43 @@ impl EmbreeSpheres {
         &self.device.info
     }
 
+    /// Closest hits of up to 8 rays with one `rtcIntersect8` call; lanes past `rays.len()` are `None`.
+    #[inline]
+    pub fn intersect8(&self, rays: &[Ray]) -> [Option<Hit>; 8] {
+        self.intersect_packet::<8, RTCRayHit8>(self.device.lib.api.intersect8, rays)
+    }
+
     /// Closest hits of up to 16 rays with one `rtcIntersect16` call; lanes past `rays.len()` are `None`.
+    #[inline]
     pub fn intersect16(&self, rays: &[Ray]) -> [Option<Hit>; 16] {
-        assert!(rays.len() <= 16, "intersect16 takes at most 16 rays, got {}", rays.len());
-        let mut valid = [LANE_INACTIVE; 16];
+        self.intersect_packet::<16, RTCRayHit16>(self.device.lib.api.intersect16, rays)
+    }
+
+    /// Closest hits of up to N rays with one `rtcIntersectN` call (`query`), the packet on the stack.
+    #[inline(always)]
+    fn intersect_packet<const N: usize, P: RTCRayHitN<N>>(
+        &self,
+        query: FnIntersectN<P>,
+        rays: &[Ray],
+    ) -> [Option<Hit>; N] {
+        assert!(rays.len() <= N, "intersect{N} takes at most {N} rays, got {}", rays.len());
+        let mut valid = [LANE_INACTIVE; N];
         // Inactive lanes hold a harmless, well-formed ray.
-        let mut packet = RTCRayHit16 {
-            ray: RTCRay16 {
-                org_x: [0.0; 16],
-                org_y: [0.0; 16],
-                org_z: [0.0; 16],
-                tnear: [0.0; 16],
-                dir_x: [0.0; 16],
-                dir_y: [0.0; 16],
-                dir_z: [1.0; 16],
-                time: [0.0; 16],
-                tfar: [-f32::INFINITY; 16],
-                mask: [u32::MAX; 16],
-                id: [0; 16],
-                flags: [0; 16],
-            },
-            hit: RTCHit16 {
-                Ng_x: [0.0; 16],
-                Ng_y: [0.0; 16],
-                Ng_z: [0.0; 16],
-                u: [0.0; 16],
-                v: [0.0; 16],
-                primID: [RTC_INVALID_GEOMETRY_ID; 16],
-                geomID: [RTC_INVALID_GEOMETRY_ID; 16],
-                instID: [[RTC_INVALID_GEOMETRY_ID; 16]],
-                instPrimID: [[RTC_INVALID_GEOMETRY_ID; 16]],
-            },
-        };
+        let mut packet = P::INACTIVE;
+        let r = packet.ray_mut();
         for (i, ray) in rays.iter().enumerate() {
             valid[i] = LANE_ACTIVE;
-            let r = &mut packet.ray;
             (r.org_x[i], r.org_y[i], r.org_z[i]) = (ray.origin.x, ray.origin.y, ray.origin.z);
             (r.dir_x[i], r.dir_y[i], r.dir_z[i]) = (ray.dir.x, ray.dir.y, ray.dir.z);
             (r.tnear[i], r.tfar[i]) = (ray.t_min, ray.t_max);
         }
-        // SAFETY: a committed scene; `packet` is 64-byte aligned (its type's alignment) and fully initialized.
-        unsafe { (self.device.lib.api.intersect16)(valid.as_ptr(), self.scene, &mut packet, std::ptr::null_mut()) };
+        // SAFETY: a committed scene; `packet` has the alignment `rtcIntersectN` requires (its type's: 32 bytes for 8
+        // lanes, 64 for 16), `valid` has N lanes, and both are fully initialized; NULL arguments = defaults.
+        unsafe { query(valid.as_ptr(), self.scene, &mut packet, std::ptr::null_mut()) };
+        let (ray, hit) = packet.parts();
         std::array::from_fn(|i| {
-            (valid[i] == LANE_ACTIVE && packet.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID)
-                .then(|| Hit { t: packet.ray.tfar[i], prim: packet.hit.primID[i] })
+            (valid[i] == LANE_ACTIVE && hit.geomID[i] != RTC_INVALID_GEOMETRY_ID)
+                .then(|| Hit { t: ray.tfar[i], prim: hit.primID[i] })
         })
     }
 }

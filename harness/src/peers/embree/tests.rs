@@ -1,10 +1,11 @@
-//! Embree against brute force: single rays, occlusion and 16-wide packets, plus the loader's error.
+//! Embree against brute force: single rays, occlusion and 8- and 16-wide packets, plus the loader's error.
 
 use std::path::PathBuf;
 
 use schema::{EmbreeQuality, Named};
-use tracer::accel::Accelerator;
+use tracer::accel::{Accelerator, Hit};
 use tracer::counters::NoCounters;
+use tracer::geometry::Ray;
 use tracer::testing::{Reference, TestScene, Tolerance, scenes};
 
 use super::library::SearchInputs;
@@ -43,18 +44,33 @@ fn packets_agree_with_brute_force() {
     for TestScene { label, spheres, rays } in scenes() {
         let scene = EmbreeSpheres::build(&device, &spheres, EmbreeQuality::Medium).expect("build");
         let reference = Reference::new(&spheres, &rays);
-        // Full packets, then the same rays in partial packets of 7 (lanes 7..16 inactive).
-        for width in [16, 7] {
-            let mut comparison = reference.compare(&format!("embree packets of {width} {label}"), Tolerance::RelativeToScale);
-            for (c, chunk) in rays.chunks(width).enumerate() {
-                let got = scene.intersect16(chunk);
-                for (lane, &hit) in got[..chunk.len()].iter().enumerate() {
-                    comparison.closest(c * width + lane, hit);
-                }
-                assert!(got[chunk.len()..].iter().all(Option::is_none), "{label}: inactive lanes must report no hit");
+        check_packets(&reference, &label, &rays, |chunk| scene.intersect16(chunk));
+        check_packets(&reference, &label, &rays, |chunk| scene.intersect8(chunk));
+    }
+}
+
+/// `query` (an `intersectN`) in full packets of N, then the same rays in partial packets of 7 (lanes 7..N
+/// inactive), against brute force.
+fn check_packets<const N: usize>(
+    reference: &Reference,
+    label: &str,
+    rays: &[Ray],
+    query: impl Fn(&[Ray]) -> [Option<Hit>; N],
+) {
+    for width in [N, 7] {
+        let mut comparison = reference
+            .compare(&format!("embree intersect{N} in packets of {width} {label}"), Tolerance::RelativeToScale);
+        for (c, chunk) in rays.chunks(width).enumerate() {
+            let got = query(chunk);
+            for (lane, &hit) in got[..chunk.len()].iter().enumerate() {
+                comparison.closest(c * width + lane, hit);
             }
-            comparison.finish();
+            assert!(
+                got[chunk.len()..].iter().all(Option::is_none),
+                "{label}: inactive lanes of intersect{N} must report no hit"
+            );
         }
+        comparison.finish();
     }
 }
 
