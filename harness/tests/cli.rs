@@ -212,7 +212,7 @@ fn a_packet_size_not_allowed_is_one_line_exit_2_and_nothing_written() {
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
-    assert!(err.contains("packet.toml: sweep.packet_size[0]: 4 is not allowed (allowed: 1, 8, 16)"), "{err}");
+    assert!(err.contains("packet.toml: sweep.packet_size[0]: 4 is not allowed (allowed: 1, 8, 16, 64)"), "{err}");
     assert!(!out.exists(), "nothing written");
 }
 

@@ -77,9 +77,9 @@ declare_columns! {
         simd_kernel: Option<Kernel> = Some(WideParams::default().kernel), applies wide else None, added 2;
         /// Order in which the wide BVH visits a node's children: stored, nearest entry first, or by ray octant.
         child_order: Option<ChildOrdering> = Some(WideParams::default().order), applies wide else None, added 2;
-        /// Rays traced together in a ray set (renders trace one ray at a time): the wide BVH 1 (one at a time), or
-        /// packets of 8 or 16 with an active mask; `embree-packets` 8 (`rtcIntersect8`) or 16 (`rtcIntersect16`, its
-        /// default).
+        /// Rays traced together in a ray set (renders trace one ray at a time): the wide BVH 1 (one at a time),
+        /// packets of 8 or 16 with an active mask, or 64: frustum-culled packets of an 8×8 tile of camera rays;
+        /// `embree-packets` 8 (`rtcIntersect8`) or 16 (`rtcIntersect16`, its default).
         packet_size: Option<PacketSize> = Some(PacketSize(WideParams::default().packet)), applies packet_ray_set else None,
             default_for embree_packets = Some(PacketSize::EMBREE_DEFAULT), added 4, unit "rays";
     }

@@ -116,15 +116,33 @@ fn cosine_direction(n: Vec3, rng: &mut SplitMix64) -> Vec3 {
 }
 
 impl RaySet {
-    /// One closest-hit ray per pixel of the scene's camera, row-major.
+    /// One closest-hit ray per pixel of the scene's camera, in [`RaySet::TILE`]-pixel square tiles: tiles
+    /// row-major, pixels row-major inside a tile (edge tiles cut at the image's border).
+    ///
+    /// So 8, 16 and 64 consecutive rays of a full tile are a row, two rows and the whole tile: coherent packets
+    /// for every backend that traces rays in packets, and the wide BVH's tile packets ([`crate::accel::wide::tile`]).
     pub fn primary(scene: &Scene) -> Self {
         let cam = scene.camera;
         let rays = cam.rays();
-        let rays = (0..cam.height).flat_map(|y| (0..cam.width).map(move |x| rays.ray(x, y))).collect();
+        let rays = Self::tile_order(cam.width, cam.height).map(|(x, y)| rays.ray(x, y)).collect();
         RaySet { kind: RayKind::Primary, rays }
     }
 
-    /// Hit points and outward normals (facing the ray) of the primary rays that hit, in pixel order.
+    /// Side of the square pixel tiles primary rays come in.
+    pub const TILE: u32 = 8;
+
+    /// The pixels of a `width` × `height` image in the order of [`RaySet::primary`].
+    pub fn tile_order(width: u32, height: u32) -> impl Iterator<Item = (u32, u32)> {
+        let t = Self::TILE;
+        (0..height.div_ceil(t)).flat_map(move |ty| {
+            (0..width.div_ceil(t)).flat_map(move |tx| {
+                let (xs, ys) = (tx * t..(tx * t + t).min(width), ty * t..(ty * t + t).min(height));
+                ys.flat_map(move |y| xs.clone().map(move |x| (x, y)))
+            })
+        })
+    }
+
+    /// Hit points and outward normals (facing the ray) of the primary rays that hit, in their order.
     fn surface_points(scene: &Scene, primary: &RaySet, hits: &[Hit]) -> Vec<(Vec3, Vec3)> {
         primary
             .rays
@@ -183,7 +201,7 @@ impl RaySet {
     }
 }
 
-/// Rays per unit of work handed to the executor (a multiple of 16 so packet backends fill their packets).
+/// Rays per unit of work handed to the executor (a multiple of 64, so that packets of 8, 16 and 64 rays fill).
 pub const RAYS_PER_CHUNK: usize = 256;
 
 /// Traces every ray of `set` with `accel` under `strategy`; answers are in ray order.
@@ -216,6 +234,22 @@ pub fn trace<A: Accelerator, C: Counters>(accel: &A, set: &RaySet, strategy: &St
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tile_order_covers_every_pixel_once_tile_by_tile() {
+        for (w, h) in [(16, 8), (20, 13), (1, 1), (7, 9)] {
+            let order: Vec<(u32, u32)> = RaySet::tile_order(w, h).collect();
+            let mut sorted = order.clone();
+            sorted.sort_by_key(|&(x, y)| (y, x));
+            let row_major: Vec<(u32, u32)> = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).collect();
+            assert_eq!(sorted, row_major, "{w}x{h}: every pixel once");
+        }
+        let order: Vec<(u32, u32)> = RaySet::tile_order(20, 13).collect();
+        assert_eq!(order[..10], [(0, 0), (1, 0), (2, 0), (3, 0), (4, 0), (5, 0), (6, 0), (7, 0), (0, 1), (1, 1)]);
+        assert!(order[..64].iter().all(|&(x, y)| x < 8 && y < 8), "the first 64 rays are the first tile");
+        assert_eq!(order[128..132], [(16, 0), (17, 0), (18, 0), (19, 0)], "the third tile is cut at the border");
+        assert_eq!(order[132], (16, 1));
+    }
 
     #[test]
     fn basis_is_orthonormal_and_cosine_directions_face_the_normal() {

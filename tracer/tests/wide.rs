@@ -13,6 +13,7 @@ use tracer::accel::{AccelKind, AccelParams, Accelerator, BuiltAccel, BvhParams, 
 use tracer::counters::{NoCounters, WorkCounters};
 use tracer::executor::Strategy;
 use tracer::geometry::{Ray, Sphere};
+use tracer::rays::RaySet;
 use tracer::render::{PrimaryHits, RenderSettings, render};
 use tracer::scene::SceneKind;
 use tracer::testing::{self, Reference, Tolerance};
@@ -225,6 +226,46 @@ fn wide_trees_render_the_same_image_as_brute_force() {
     for (p, tree) in every_wide(&scene.spheres).step_by(5) {
         let (image, _) = render::<_, NoCounters>(&scene, &tree, &RenderSettings::default(), &Strategy::SERIAL);
         assert_eq!(image.hash(), reference.hash(), "{p:?}");
+    }
+}
+
+/// Tile packets of primary rays (8×8 tiles, the order of `RaySet::primary`) answer each ray exactly as it answers
+/// alone, count the same work with every kernel, and share it: the frustum and the ranged tests box-test fewer
+/// boxes per ray than packets of 16 rays with a mask, which test every ray at every node.
+#[test]
+fn tile_packets_answer_like_single_rays_and_share_their_box_tests() {
+    let mut scene = SceneKind::RandomSpheres.generate(2000, 5);
+    scene.camera = scene.camera.with_resolution(256, 192);
+    let rays = RaySet::primary(&scene).rays;
+    let bvh = BvhParams { split: Split::BinnedSah, leaf_size: 4, ..BvhParams::default() };
+    let batch = |wide: WideParams, kernel: Kernel| {
+        let tree = WideBvh::build(&scene.spheres, &bvh, &WideParams { kernel, ..wide });
+        let (mut hits, mut counters) = (vec![PrimaryHits::MISS; rays.len()], WorkCounters::default());
+        tree.intersect_batch(&rays, &mut hits, &mut counters);
+        let (mut occluded, mut any) = (vec![false; rays.len()], WorkCounters::default());
+        tree.occluded_batch(&rays, &mut occluded, &mut any);
+        (hits, occluded, counters, any)
+    };
+    let single = batch(WideParams::default(), Kernel::Scalar);
+    assert!(single.0.iter().filter(|h| h.prim != PrimaryHits::MISS.prim).count() > rays.len() / 4);
+    for width in WideParams::WIDTHS {
+        let wide = |packet| WideParams { width, packet, ..WideParams::default() };
+        let tiles = batch(wide(64), Kernel::Scalar);
+        assert!(tiles.0 == single.0 && tiles.1 == single.1, "width {width}: tile packets answer as single rays");
+        for &kernel in &Kernel::available()[1..] {
+            let got = batch(wide(64), kernel);
+            assert!(got == tiles, "width {width} {kernel:?}: the scalar kernel's answers and counts");
+        }
+        let packets = batch(wide(16), Kernel::Scalar);
+        let per_ray = |c: &WorkCounters| c.box_tests as f64 / c.rays as f64;
+        for (query, tile, packet) in [("closest", &tiles.2, &packets.2), ("any", &tiles.3, &packets.3)] {
+            assert!(
+                per_ray(tile) * 2.0 < per_ray(packet),
+                "width {width} {query}: {:.1} box tests per ray in tiles, {:.1} in packets of 16",
+                per_ray(tile),
+                per_ray(packet)
+            );
+        }
     }
 }
 

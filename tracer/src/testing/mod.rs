@@ -43,7 +43,7 @@ pub fn every_tree() -> Vec<AccelParams> {
 /// Every wide BVH configuration this CPU can run: every kernel it has ([`Kernel::available`]: scalar, AVX2,
 /// AVX-512) × width × leaf block × child order. The binary tree each is collapsed from cycles through every split ×
 /// leaf sizes 1, 16, 4 and 8 (so leaves of one block, of several blocks and merged subtrees all occur), and the
-/// batch packet size through 1, 8 and 16 (so every kernel, width and block runs in packets of both sizes).
+/// batch packet size through 1, 8, 16 and 64 (so every kernel, width and block runs in packets of every size).
 pub fn every_wide() -> Vec<AccelParams> {
     let mut all = Vec::new();
     let mut binary = Split::ALL.into_iter().flat_map(|split| [1, 16, 4, 8].map(|leaf_size| (split, leaf_size))).cycle();

@@ -7,6 +7,7 @@ use glam::Vec3;
 use crate::accel::{Accelerator, List};
 use crate::counters::NoCounters;
 use crate::geometry::{Aabb, Ray, Sphere};
+use crate::rays::RaySet;
 use crate::rng::SplitMix64;
 use crate::scene::Scene;
 
@@ -38,7 +39,7 @@ pub fn sphere_ray_mix(spheres: &[Sphere], seed: u64, count: usize) -> Vec<Ray> {
 
 /// The rays a renderer traces in `scene`, plus the hard families, in this order:
 ///
-/// - the camera's primary rays at 40 × 30;
+/// - the camera's primary rays at 40 × 30, in the tile order of [`RaySet::primary`];
 /// - 300 × (a random line, a finite segment), points drawn from the box around the spheres and the camera
 ///   (grown by a quarter of its extent per side);
 /// - with spheres, 200 × (a ray from inside a sphere, a grazing ray tangent at `1 ± 1e-5`, a grazing ray
@@ -50,7 +51,7 @@ pub fn scene_ray_mix(scene: &Scene, seed: u64) -> Vec<Ray> {
     let mut draw = Families::new(spheres, seed, scene.camera.position, 0.25);
     let camera = scene.camera.with_resolution(40, 30);
     let cam = camera.rays();
-    let mut rays: Vec<Ray> = (0..camera.height).flat_map(|y| (0..camera.width).map(move |x| cam.ray(x, y))).collect();
+    let mut rays: Vec<Ray> = RaySet::tile_order(camera.width, camera.height).map(|(x, y)| cam.ray(x, y)).collect();
     for _ in 0..300 {
         rays.push(draw.line());
         rays.push(draw.segment());

@@ -5,7 +5,8 @@
 //! - [`node`]: the wide node (child boxes per axis, 64-byte aligned); [`leaf`]: the sphere blocks;
 //! - [`collapse`]: from the shared binary builder's tree (built with the SAH counting leaf blocks) to wide nodes;
 //! - [`ray`], [`order`], [`traverse`]: the traversal, generic over [`kernel`] (scalar, AVX2, AVX-512), child
-//!   order and counters.
+//!   order and counters; [`packet`]: packets of 8 or 16 rays with an active mask; [`tile`]: frustum-culled packets
+//!   of an 8×8 tile of camera rays.
 //!
 //! [`WideBvh`] holds one of six layouts (width × leaf block) and the kernel resolved at build time; each query
 //! dispatches once (layout, order, kernel) into a traversal compiled for exactly that combination.
@@ -18,12 +19,14 @@ pub mod order;
 pub mod packet;
 pub mod params;
 pub mod ray;
+pub mod tile;
 pub mod traverse;
 
 use collapse::{Tree, collapse};
 use kernel::Query;
 use order::{ByOctant, Nearest, Order, Stored};
 use packet::{AnyPackets, ClosestPackets};
+use tile::{AnyTiles, ClosestTiles};
 use traverse::{Any, AnyBatch, Closest, ClosestBatch};
 
 pub use params::{ChildOrdering, Kernel, WideParams};
@@ -244,6 +247,7 @@ impl Accelerator for WideBvh {
         match self.params.packet {
             8 => self.dispatch_packets(ClosestPackets::<C, 8> { rays, out, counters }),
             16 => self.dispatch_packets(ClosestPackets::<C, 16> { rays, out, counters }),
+            64 => self.dispatch_packets(ClosestTiles { rays, out, counters }),
             _ => self.dispatch(ClosestBatch { rays, out, counters }),
         }
     }
@@ -252,6 +256,7 @@ impl Accelerator for WideBvh {
         match self.params.packet {
             8 => self.dispatch_packets(AnyPackets::<C, 8> { rays, out, counters }),
             16 => self.dispatch_packets(AnyPackets::<C, 16> { rays, out, counters }),
+            64 => self.dispatch_packets(AnyTiles { rays, out, counters }),
             _ => self.dispatch(AnyBatch { rays, out, counters }),
         }
     }

@@ -35,34 +35,34 @@ use crate::render::PrimaryHits;
 
 /// Relative slack on a ray's closest hit when culling boxes: far above the few ulps a box's entry distance can
 /// round past a sphere's hit distance, far below what would make a visit useless.
-const CULL_SLACK: f32 = 1.0 + 1.0 / 65536.0;
+pub(super) const CULL_SLACK: f32 = 1.0 + 1.0 / 65536.0;
 
 /// Stack entries: as for one ray (see `traverse`), every level leaves at most `W - 1` entries.
 const STACK: usize = MAX_DEPTH * 8;
 
 /// A child waiting, the rays that entered it, and the nearest of their entry distances.
 #[derive(Clone, Copy)]
-struct Entry {
-    child: ChildRef,
-    rays: u32,
-    t: f32,
+pub(super) struct Entry {
+    pub(super) child: ChildRef,
+    pub(super) rays: u64,
+    pub(super) t: f32,
 }
 
 /// The packet's stack.
-struct Stack {
+pub(super) struct Stack {
     entries: [MaybeUninit<Entry>; STACK],
-    len: usize,
+    pub(super) len: usize,
 }
 
 impl Stack {
     #[inline(always)]
-    fn new() -> Self {
+    pub(super) fn new() -> Self {
         Self { entries: [const { MaybeUninit::uninit() }; STACK], len: 0 }
     }
 
     /// Inserts among the entries from `base` up, the largest distance lowest (the nearest ends on top).
     #[inline(always)]
-    fn insert_sorted(&mut self, base: usize, e: Entry) {
+    pub(super) fn insert_sorted(&mut self, base: usize, e: Entry) {
         assert!(self.len < STACK, "packet stack overflow");
         let mut i = self.len;
         // SAFETY: entries below `len` are written, and `i <= len < STACK`.
@@ -78,7 +78,7 @@ impl Stack {
     }
 
     #[inline(always)]
-    fn pop(&mut self) -> Option<Entry> {
+    pub(super) fn pop(&mut self) -> Option<Entry> {
         if self.len == 0 {
             return None;
         }
@@ -89,18 +89,18 @@ impl Stack {
 }
 
 /// The rays of a packet, prepared once.
-struct Packet<const P: usize> {
-    lanes: [RayLanes; P],
+pub(super) struct Packet<const P: usize> {
+    pub(super) lanes: [RayLanes; P],
     /// Closest hit so far (closest-hit packets) or the ray's own `t_max`.
-    t_max: [f32; P],
+    pub(super) t_max: [f32; P],
     /// Hit sphere so far ([`PAD`]: none).
-    best: [u32; P],
+    pub(super) best: [u32; P],
 }
 
 impl<const P: usize> Packet<P> {
     /// `rays.len()` rays (1..=P); lanes past them repeat the last ray and are never active.
     #[inline(always)]
-    fn new(rays: &[Ray]) -> Self {
+    pub(super) fn new(rays: &[Ray]) -> Self {
         let last = rays.len() - 1;
         Self {
             lanes: std::array::from_fn(|i| RayLanes::new(&rays[i.min(last)])),
@@ -112,7 +112,7 @@ impl<const P: usize> Packet<P> {
 
 /// Iterates the set bits of a mask.
 #[inline(always)]
-fn bits(mut mask: u32) -> impl Iterator<Item = usize> {
+pub(super) fn bits(mut mask: u64) -> impl Iterator<Item = usize> {
     std::iter::from_fn(move || {
         (mask != 0).then(|| {
             let i = mask.trailing_zeros() as usize;
@@ -122,9 +122,15 @@ fn bits(mut mask: u32) -> impl Iterator<Item = usize> {
     })
 }
 
+/// The mask of the first `n` rays (`n` in 1..=64).
+#[inline(always)]
+pub(super) fn all(n: usize) -> u64 {
+    u64::MAX >> (64 - n)
+}
+
 /// The rays of `mask` whose current `t_max` (with [`CULL_SLACK`]) lies beyond `t`.
 #[inline(always)]
-fn still_wanted<const P: usize>(mask: u32, t: f32, t_max: &[f32; P]) -> u32 {
+pub(super) fn still_wanted<const P: usize>(mask: u64, t: f32, t_max: &[f32; P]) -> u64 {
     bits(mask).filter(|&i| t < t_max[i] * CULL_SLACK).fold(0, |m, i| m | 1 << i)
 }
 
@@ -136,7 +142,7 @@ fn still_wanted<const P: usize>(mask: u32, t: f32, t_max: &[f32; P]) -> u32 {
 unsafe fn enter<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
     tree: &Tree<W, B>,
     node: ChildRef,
-    active: u32,
+    active: u64,
     packet: &Packet<P>,
     stack: &mut Stack,
     counters: &mut C,
@@ -144,7 +150,7 @@ unsafe fn enter<K: Ops, C: Counters, const W: usize, const B: usize, const P: us
     debug_assert!(node.index() < tree.nodes.len());
     // SAFETY: node references come from the collapse, which emits every node it refers to.
     let node = unsafe { tree.nodes.get_unchecked(node.index()) };
-    let mut entered = [0u32; W];
+    let mut entered = [0u64; W];
     let mut nearest = [f32::INFINITY; W];
     let mut dist = [0.0f32; W];
     for i in bits(active) {
@@ -154,7 +160,7 @@ unsafe fn enter<K: Ops, C: Counters, const W: usize, const B: usize, const P: us
         }
         // SAFETY: forwarded from the caller.
         let hits = unsafe { K::boxes(node, &packet.lanes[i], packet.t_max[i] * CULL_SLACK, &mut dist) };
-        for lane in bits(hits) {
+        for lane in bits(hits as u64) {
             entered[lane] |= 1 << i;
             nearest[lane] = nearest[lane].min(dist[lane]);
         }
@@ -167,20 +173,19 @@ unsafe fn enter<K: Ops, C: Counters, const W: usize, const B: usize, const P: us
     }
 }
 
-/// Nearest hits of up to `P` rays into `out`.
+/// Nearest hits of the packet's first `out.len()` rays (1..=P) into `out`.
 ///
 /// # Safety
 /// The CPU supports `K`'s instructions.
 #[inline(always)]
-unsafe fn closest<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
+pub(super) unsafe fn closest<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
     tree: &Tree<W, B>,
-    rays: &[Ray],
+    packet: &mut Packet<P>,
     out: &mut [Hit],
     counters: &mut C,
 ) {
-    let mut packet = Packet::<P>::new(rays);
     let mut stack = Stack::new();
-    stack.insert_sorted(0, Entry { child: ChildRef::ROOT, rays: (1u32 << rays.len()) - 1, t: f32::NEG_INFINITY });
+    stack.insert_sorted(0, Entry { child: ChildRef::ROOT, rays: all(out.len()), t: f32::NEG_INFINITY });
     while let Some(e) = stack.pop() {
         let active = still_wanted(e.rays, e.t, &packet.t_max);
         if active == 0 {
@@ -188,7 +193,7 @@ unsafe fn closest<K: Ops, C: Counters, const W: usize, const B: usize, const P: 
         }
         if e.child.is_node() {
             // SAFETY: forwarded from the caller.
-            unsafe { enter::<K, C, W, B, P>(tree, e.child, active, &packet, &mut stack, counters) };
+            unsafe { enter::<K, C, W, B, P>(tree, e.child, active, packet, &mut stack, counters) };
             continue;
         }
         debug_assert!(e.child.blocks().end <= tree.blocks.len());
@@ -214,19 +219,18 @@ unsafe fn closest<K: Ops, C: Counters, const W: usize, const B: usize, const P: 
     }
 }
 
-/// Occlusion of up to `P` rays into `out`.
+/// Occlusion of the packet's first `out.len()` rays (1..=P) into `out`.
 ///
 /// # Safety
 /// The CPU supports `K`'s instructions.
 #[inline(always)]
-unsafe fn any<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
+pub(super) unsafe fn any<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
     tree: &Tree<W, B>,
-    rays: &[Ray],
+    packet: &Packet<P>,
     out: &mut [bool],
     counters: &mut C,
 ) {
-    let packet = Packet::<P>::new(rays);
-    let mut unoccluded: u32 = (1u32 << rays.len()) - 1;
+    let mut unoccluded = all(out.len());
     let mut stack = Stack::new();
     stack.insert_sorted(0, Entry { child: ChildRef::ROOT, rays: unoccluded, t: f32::NEG_INFINITY });
     while let Some(e) = stack.pop() {
@@ -236,7 +240,7 @@ unsafe fn any<K: Ops, C: Counters, const W: usize, const B: usize, const P: usiz
         }
         if e.child.is_node() {
             // SAFETY: forwarded from the caller.
-            unsafe { enter::<K, C, W, B, P>(tree, e.child, active, &packet, &mut stack, counters) };
+            unsafe { enter::<K, C, W, B, P>(tree, e.child, active, packet, &mut stack, counters) };
             continue;
         }
         // SAFETY: as in `closest`.
@@ -284,11 +288,11 @@ impl<C: Counters, const P: usize> Query for ClosestPackets<'_, C, P> {
     type Out = ();
     #[inline(always)]
     unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) {
-        const { assert!(P <= 32, "the active mask is a u32") };
+        const { assert!(P <= 64, "the active mask is a u64") };
         for (rays, out) in self.rays.chunks(P).zip(self.out.chunks_mut(P)) {
             (0..rays.len()).for_each(|_| self.counters.ray());
             // SAFETY: forwarded from the caller.
-            unsafe { closest::<K, C, W, B, P>(tree, rays, out, self.counters) };
+            unsafe { closest::<K, C, W, B, P>(tree, &mut Packet::new(rays), out, self.counters) };
         }
     }
 }
@@ -297,11 +301,11 @@ impl<C: Counters, const P: usize> Query for AnyPackets<'_, C, P> {
     type Out = ();
     #[inline(always)]
     unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) {
-        const { assert!(P <= 32, "the active mask is a u32") };
+        const { assert!(P <= 64, "the active mask is a u64") };
         for (rays, out) in self.rays.chunks(P).zip(self.out.chunks_mut(P)) {
             (0..rays.len()).for_each(|_| self.counters.ray());
             // SAFETY: forwarded from the caller.
-            unsafe { any::<K, C, W, B, P>(tree, rays, out, self.counters) };
+            unsafe { any::<K, C, W, B, P>(tree, &Packet::new(rays), out, self.counters) };
         }
     }
 }

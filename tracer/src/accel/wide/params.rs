@@ -99,7 +99,8 @@ pub struct WideParams {
     /// The child visiting order; see [`ChildOrdering`].
     pub order: ChildOrdering,
     /// Rays a batch traces together, in [`WideParams::PACKETS`]: 1 traces them one by one, 8 or 16 in packets
-    /// with an active mask (see [`super::packet`]). Left out when serialized at 1.
+    /// with an active mask (see [`super::packet`]), 64 in frustum-culled packets of an 8×8 tile of camera rays
+    /// (see [`super::tile`]). Left out when serialized at 1.
     #[serde(skip_serializing_if = "WideParams::is_single")]
     pub packet: u32,
 }
@@ -116,7 +117,7 @@ impl WideParams {
     /// Allowed `leaf_block` values.
     pub const LEAF_BLOCKS: [u32; 3] = [4, 8, 16];
     /// Allowed `packet` values.
-    pub const PACKETS: [u32; 3] = [1, 8, 16];
+    pub const PACKETS: [u32; 4] = [1, 8, 16, 64];
 
     fn is_single(packet: &u32) -> bool {
         *packet == 1
@@ -160,7 +161,7 @@ mod tests {
         let e = WideParams { leaf_block: 2, ..WideParams::default() }.validate().unwrap_err();
         assert_eq!((e.key, e.allowed.as_str()), ("leaf_block", "4, 8, 16"));
         let e = WideParams { packet: 4, ..WideParams::default() }.validate().unwrap_err();
-        assert_eq!((e.key, e.allowed.as_str()), ("packet", "1, 8, 16"));
+        assert_eq!((e.key, e.allowed.as_str()), ("packet", "1, 8, 16, 64"));
         assert!(WideParams::default().validate().is_ok());
     }
 

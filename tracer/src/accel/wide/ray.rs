@@ -39,3 +39,72 @@ impl RayLanes {
         }
     }
 }
+
+/// Interval bounds on the rays of a packet, per axis: what [`super::kernel::Ops::frustum_boxes`] tests a node
+/// with (interval arithmetic over origins and reciprocal directions, Boulos et al. 2007).
+///
+/// On an axis where every ray's reciprocal direction has one sign, a ray's slab distances `(plane - o) * inv` are
+/// monotone in `o` and in `inv`, and IEEE rounding keeps them so: the smallest entry of any ray is
+/// `(near plane - origin_near) * inv_lo or inv_hi`, whichever is smaller, and the largest exit
+/// `(far plane - origin_far) * inv_lo or inv_hi`, whichever is larger, computed with the same operations. An axis
+/// whose signs differ is left out (it bounds nothing).
+#[derive(Clone, Copy, Debug)]
+pub struct FrustumLanes {
+    /// Per axis, the entry row of the node bounds (as [`RayLanes::near_rows`]; every ray's on a used axis).
+    pub near_rows: [usize; 3],
+    /// Per axis, whether the rays' reciprocal directions share a sign (the axis is tested).
+    pub used: [bool; 3],
+    /// Per axis, the origin that gives the smallest entry: the largest origin when the rays go up the axis, else
+    /// the smallest.
+    pub origin_near: [f32; 3],
+    /// Per axis, the origin that gives the largest exit: the smallest when the rays go up the axis, else the
+    /// largest.
+    pub origin_far: [f32; 3],
+    /// Per axis, the smallest reciprocal direction.
+    pub inv_lo: [f32; 3],
+    /// Per axis, the largest reciprocal direction.
+    pub inv_hi: [f32; 3],
+    /// The smallest `t_min`.
+    pub t_min: f32,
+}
+
+impl FrustumLanes {
+    /// True when the rays' directions lie in one octant (every axis is tested).
+    #[inline(always)]
+    pub fn is_one_octant(&self) -> bool {
+        self.used == [true; 3]
+    }
+
+    /// Bounds of `rays` (at least one).
+    #[inline(always)]
+    pub fn new(rays: &[RayLanes]) -> Self {
+        let first = &rays[0];
+        let mut f = Self {
+            near_rows: first.near_rows,
+            used: [true; 3],
+            origin_near: first.origin,
+            origin_far: first.origin,
+            inv_lo: first.inv,
+            inv_hi: first.inv,
+            t_min: first.t_min,
+        };
+        let (mut o_lo, mut o_hi) = (first.origin, first.origin);
+        for r in &rays[1..] {
+            for axis in 0..3 {
+                f.used[axis] &= r.near_rows[axis] == first.near_rows[axis];
+                o_lo[axis] = o_lo[axis].min(r.origin[axis]);
+                o_hi[axis] = o_hi[axis].max(r.origin[axis]);
+                f.inv_lo[axis] = f.inv_lo[axis].min(r.inv[axis]);
+                f.inv_hi[axis] = f.inv_hi[axis].max(r.inv[axis]);
+            }
+            f.t_min = f.t_min.min(r.t_min);
+        }
+        for axis in 0..3 {
+            // Rays going up the axis (entry row the minima, even): the entry falls as the origin grows.
+            let up = first.near_rows[axis].is_multiple_of(2);
+            (f.origin_near[axis], f.origin_far[axis]) =
+                if up { (o_hi[axis], o_lo[axis]) } else { (o_lo[axis], o_hi[axis]) };
+        }
+        f
+    }
+}

@@ -10,7 +10,7 @@ use crate::accel::wide::collapse::Tree;
 use crate::accel::wide::leaf::Block;
 use crate::accel::wide::node::WideNode;
 use crate::accel::wide::order::Order;
-use crate::accel::wide::ray::RayLanes;
+use crate::accel::wide::ray::{FrustumLanes, RayLanes};
 
 /// The AVX2 kernel.
 pub struct Avx2;
@@ -19,6 +19,7 @@ pub struct Avx2;
 ///
 /// # Safety
 /// The CPU supports AVX2 and FMA ([`crate::accel::wide::Kernel::Avx2`] is available).
+#[inline(never)]
 #[target_feature(enable = "avx2,fma")]
 pub unsafe fn run<Q: Query, O: Order, const W: usize, const B: usize>(query: Q, tree: &Tree<W, B>) -> Q::Out {
     // SAFETY: the caller checked the CPU.
@@ -27,9 +28,31 @@ pub unsafe fn run<Q: Query, O: Order, const W: usize, const B: usize>(query: Q, 
 
 impl Ops for Avx2 {
     #[inline(always)]
+    unsafe fn run_apart<Q: Query, O: Order, const W: usize, const B: usize>(query: Q, tree: &Tree<W, B>) -> Q::Out {
+        // SAFETY: forwarded from the caller.
+        unsafe { run::<Q, O, W, B>(query, tree) }
+    }
+
+    #[inline(always)]
     unsafe fn boxes<const W: usize>(node: &WideNode<W>, r: &RayLanes, t_max: f32, dist: &mut [f32; W]) -> u32 {
         unsafe {
             if W == 4 { lanes::boxes::<__m128, W>(node, r, t_max, dist) } else { lanes::boxes::<__m256, W>(node, r, t_max, dist) }
+        }
+    }
+
+    #[inline(always)]
+    unsafe fn frustum_boxes<const W: usize>(
+        node: &WideNode<W>,
+        f: &FrustumLanes,
+        t_max: f32,
+        dist: &mut [f32; W],
+    ) -> u32 {
+        unsafe {
+            if W == 4 {
+                lanes::frustum_boxes::<__m128, W>(node, f, t_max, dist)
+            } else {
+                lanes::frustum_boxes::<__m256, W>(node, f, t_max, dist)
+            }
         }
     }
 

@@ -10,7 +10,7 @@ use crate::accel::wide::collapse::Tree;
 use crate::accel::wide::leaf::Block;
 use crate::accel::wide::node::WideNode;
 use crate::accel::wide::order::Order;
-use crate::accel::wide::ray::RayLanes;
+use crate::accel::wide::ray::{FrustumLanes, RayLanes};
 
 /// The AVX-512 kernel.
 pub struct Avx512;
@@ -19,6 +19,7 @@ pub struct Avx512;
 ///
 /// # Safety
 /// The CPU supports AVX-512F, AVX2 and FMA ([`crate::accel::wide::Kernel::Avx512`] is available).
+#[inline(never)]
 #[target_feature(enable = "avx512f,avx2,fma")]
 pub unsafe fn run<Q: Query, O: Order, const W: usize, const B: usize>(query: Q, tree: &Tree<W, B>) -> Q::Out {
     // SAFETY: the caller checked the CPU.
@@ -27,8 +28,24 @@ pub unsafe fn run<Q: Query, O: Order, const W: usize, const B: usize>(query: Q, 
 
 impl Ops for Avx512 {
     #[inline(always)]
+    unsafe fn run_apart<Q: Query, O: Order, const W: usize, const B: usize>(query: Q, tree: &Tree<W, B>) -> Q::Out {
+        // SAFETY: forwarded from the caller.
+        unsafe { run::<Q, O, W, B>(query, tree) }
+    }
+
+    #[inline(always)]
     unsafe fn boxes<const W: usize>(node: &WideNode<W>, r: &RayLanes, t_max: f32, dist: &mut [f32; W]) -> u32 {
         unsafe { Avx2::boxes(node, r, t_max, dist) }
+    }
+
+    #[inline(always)]
+    unsafe fn frustum_boxes<const W: usize>(
+        node: &WideNode<W>,
+        f: &FrustumLanes,
+        t_max: f32,
+        dist: &mut [f32; W],
+    ) -> u32 {
+        unsafe { Avx2::frustum_boxes(node, f, t_max, dist) }
     }
 
     #[inline(always)]

@@ -8,7 +8,7 @@ use std::arch::x86_64::*;
 
 use crate::accel::wide::leaf::Block;
 use crate::accel::wide::node::WideNode;
-use crate::accel::wide::ray::RayLanes;
+use crate::accel::wide::ray::{FrustumLanes, RayLanes};
 use crate::geometry::RayBoxTester;
 
 /// A vector of f32 lanes and its lane mask. Every method is unsafe: it runs only inside a kernel's `run`, on a
@@ -347,6 +347,35 @@ pub unsafe fn boxes<V: Vf, const W: usize>(node: &WideNode<W>, r: &RayLanes, t_m
         let far = x1.lo(y1).lo(z1).mul(V::splat(RayBoxTester::FAR_SCALE));
         near.store(dist.as_mut_ptr());
         V::bits(V::and(near.le(far), near.le(V::splat(t_max))))
+    }
+}
+
+/// The frustum test of [`super::Ops::frustum_boxes`], `V::LANES == W` children at once.
+#[inline(always)]
+pub unsafe fn frustum_boxes<V: Vf, const W: usize>(
+    node: &WideNode<W>,
+    f: &FrustumLanes,
+    t_max: f32,
+    dist: &mut [f32; W],
+) -> u32 {
+    debug_assert_eq!(V::LANES, W);
+    unsafe {
+        let row = |row: usize| V::load(node.bounds.as_ptr().add(row).cast());
+        let (mut near, mut far) = (V::splat(f.t_min), V::splat(f32::INFINITY));
+        for axis in 0..3 {
+            if !f.used[axis] {
+                continue;
+            }
+            let (lo, hi) = (V::splat(f.inv_lo[axis]), V::splat(f.inv_hi[axis]));
+            let x = row(f.near_rows[axis]).sub(V::splat(f.origin_near[axis]));
+            let y = row(f.near_rows[axis] ^ 1).sub(V::splat(f.origin_far[axis]));
+            near = near.hi(x.mul(lo).lo(x.mul(hi)));
+            far = far.lo(y.mul(lo).hi(y.mul(hi)));
+        }
+        let occupied = row(0).le(row(1));
+        let far = far.mul(V::splat(RayBoxTester::FAR_SCALE));
+        near.store(dist.as_mut_ptr());
+        V::bits(V::and(occupied, V::and(near.le(far), near.le(V::splat(t_max)))))
     }
 }
 

@@ -22,7 +22,7 @@ use super::collapse::Tree;
 use super::leaf::Block;
 use super::node::WideNode;
 use super::order::Order;
-use super::ray::RayLanes;
+use super::ray::{FrustumLanes, RayLanes};
 
 /// One kernel's box and sphere tests. Unsafe: callers run them only on a CPU with the kernel's instructions,
 /// inside the kernel's `run`.
@@ -33,6 +33,19 @@ pub trait Ops {
     /// # Safety
     /// The CPU supports the kernel's instructions.
     unsafe fn boxes<const W: usize>(node: &WideNode<W>, ray: &RayLanes, t_max: f32, dist: &mut [f32; W]) -> u32;
+
+    /// Frustum test of every child of `node` before `t_max`: bit `lane` of the result is clear for the children no
+    /// ray of the packet enters (before `t_max`), and `dist[lane]` is at most the entry distance of any ray that
+    /// enters child `lane` (see [`FrustumLanes`]). Empty lanes are never set.
+    ///
+    /// # Safety
+    /// The CPU supports the kernel's instructions.
+    unsafe fn frustum_boxes<const W: usize>(
+        node: &WideNode<W>,
+        frustum: &FrustumLanes,
+        t_max: f32,
+        dist: &mut [f32; W],
+    ) -> u32;
 
     /// The nearest hit in `(t_min, t_max)` among the block's spheres: its distance and lowest lane, if any.
     ///
@@ -45,6 +58,13 @@ pub trait Ops {
     /// # Safety
     /// The CPU supports the kernel's instructions.
     unsafe fn any<const B: usize>(block: &Block<B>, ray: &RayLanes, t_max: f32) -> bool;
+
+    /// Runs `query` in the kernel's entry function (compiled for the kernel, never inlined into the caller): for a
+    /// query that picks one of several traversals per packet, so that each is compiled on its own.
+    ///
+    /// # Safety
+    /// The CPU supports the kernel's instructions.
+    unsafe fn run_apart<Q: Query, O: Order, const W: usize, const B: usize>(query: Q, tree: &Tree<W, B>) -> Q::Out;
 }
 
 /// Work run against a tree with a kernel and child order chosen at compile time (a ray, or a batch of rays).

@@ -7,7 +7,7 @@ use crate::accel::wide::collapse::Tree;
 use crate::accel::wide::leaf::Block;
 use crate::accel::wide::node::WideNode;
 use crate::accel::wide::order::Order;
-use crate::accel::wide::ray::RayLanes;
+use crate::accel::wide::ray::{FrustumLanes, RayLanes};
 use crate::geometry::RayBoxTester;
 
 /// The portable kernel.
@@ -36,6 +36,24 @@ fn entry<const W: usize>(node: &WideNode<W>, r: &RayLanes, t_max: f32, lane: usi
     let near = hi(hi(x0, y0), hi(z0, r.t_min));
     let far = lo(lo(x1, y1), z1) * RayBoxTester::FAR_SCALE;
     (near <= far && near <= t_max).then_some(near)
+}
+
+/// A lower bound on the entry distance of every ray of `f` into child `lane` of `node`, if some ray may enter it
+/// before `t_max` (see [`FrustumLanes`]); `None` for empty lanes.
+#[inline(always)]
+fn frustum_entry<const W: usize>(node: &WideNode<W>, f: &FrustumLanes, t_max: f32, lane: usize) -> Option<f32> {
+    let hi = |a: f32, b: f32| if a > b { a } else { b };
+    let lo = |a: f32, b: f32| if a < b { a } else { b };
+    let (mut near, mut far) = (f.t_min, f32::INFINITY);
+    for axis in (0..3).filter(|&axis| f.used[axis]) {
+        let row = f.near_rows[axis];
+        let x = node.bounds[row][lane] - f.origin_near[axis];
+        let y = node.bounds[row ^ 1][lane] - f.origin_far[axis];
+        near = hi(near, lo(x * f.inv_lo[axis], x * f.inv_hi[axis]));
+        far = lo(far, hi(y * f.inv_lo[axis], y * f.inv_hi[axis]));
+    }
+    let occupied = node.bounds[0][lane] <= node.bounds[1][lane];
+    (occupied && near <= far * RayBoxTester::FAR_SCALE && near <= t_max).then_some(near)
 }
 
 /// Nearest root of lane `lane`'s sphere in `(t_min, t_max)`, or infinity: [`crate::geometry::Sphere::intersect`]
@@ -68,10 +86,32 @@ pub(crate) fn sphere<const B: usize>(block: &Block<B>, r: &RayLanes, t_max: f32,
 
 impl Ops for Scalar {
     #[inline(always)]
+    unsafe fn run_apart<Q: Query, O: Order, const W: usize, const B: usize>(query: Q, tree: &Tree<W, B>) -> Q::Out {
+        run::<Q, O, W, B>(query, tree)
+    }
+
+    #[inline(always)]
     unsafe fn boxes<const W: usize>(node: &WideNode<W>, r: &RayLanes, t_max: f32, dist: &mut [f32; W]) -> u32 {
         let mut mask = 0;
         for (lane, d) in dist.iter_mut().enumerate() {
             if let Some(t) = entry(node, r, t_max, lane) {
+                *d = t;
+                mask |= 1 << lane;
+            }
+        }
+        mask
+    }
+
+    #[inline(always)]
+    unsafe fn frustum_boxes<const W: usize>(
+        node: &WideNode<W>,
+        f: &FrustumLanes,
+        t_max: f32,
+        dist: &mut [f32; W],
+    ) -> u32 {
+        let mut mask = 0;
+        for (lane, d) in dist.iter_mut().enumerate() {
+            if let Some(t) = frustum_entry(node, f, t_max, lane) {
                 *d = t;
                 mask |= 1 << lane;
             }
