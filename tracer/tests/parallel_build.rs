@@ -4,11 +4,17 @@
 //!
 //! The flat layout's nodes are the builder's nodes as they are; the pointer tree's leaves, in depth-first
 //! order, are its primitive order. So the two tests together compare the builder's whole output.
+//!
+//! Nodes large enough to bin in parallel ([`PARALLEL_BIN_MIN_PRIMS`]) take a scene larger still: the binned SAH
+//! alone builds one, and its whole output (nodes, primitive order, ordered spheres) is compared, and so is the
+//! wide BVH collapsed from it (whose parallel collapse then has a top of several levels).
 
 use rayon::{ThreadPool, ThreadPoolBuilder};
-use tracer::accel::bvh::builder::PARALLEL_MIN_PRIMS;
+use tracer::accel::bvh::builder::{self, PARALLEL_MIN_PRIMS};
 use tracer::accel::bvh::pointer::{BvhNode, BvhNodeKind};
-use tracer::accel::{Accelerator, Bvh, BvhParams, FlatBvh, Hit, Split};
+use tracer::accel::bvh::split::binned_sah::PARALLEL_BIN_MIN_PRIMS;
+use tracer::accel::wide::collapse::PARALLEL_COLLAPSE_MIN_PRIMS;
+use tracer::accel::{Accelerator, Bvh, BvhParams, FlatBvh, Hit, Split, WideBvh, WideParams};
 use tracer::counters::NoCounters;
 use tracer::geometry::{Ray, Sphere};
 use tracer::scene::SceneKind;
@@ -113,4 +119,27 @@ fn pointer_bvh_is_the_same_in_1_2_and_4_thread_pools() {
             }
         }
     }
+}
+
+#[test]
+fn binned_sah_is_the_same_when_large_nodes_bin_in_parallel() {
+    // Twice the parallel binning threshold: the root bins in parallel in the 2- and 4-thread pools.
+    let spheres = SceneKind::RandomSpheres.generate(2 * PARALLEL_BIN_MIN_PRIMS, 11).spheres;
+    let params = BvhParams { split: Split::BinnedSah, leaf_size: 4, ..BvhParams::default() };
+    let pools = pools();
+    for block in [1, 8] {
+        let built: Vec<_> =
+            pools.iter().map(|p| p.install(|| builder::build_for_blocks(&spheres, &params, block))).collect();
+        for (tree, threads) in built.iter().zip(THREADS).skip(1) {
+            assert!(tree.nodes == built[0].nodes, "blocks of {block}: nodes differ with {threads} threads");
+            assert!(tree.prim_order == built[0].prim_order, "blocks of {block}: order differs with {threads} threads");
+            assert!(tree.ordered_spheres == built[0].ordered_spheres, "blocks of {block}: {threads} threads");
+        }
+    }
+    // The wide tree over it collapses in parallel with a top several levels deep.
+    const _: () = assert!(2 * PARALLEL_BIN_MIN_PRIMS >= 8 * PARALLEL_COLLAPSE_MIN_PRIMS);
+    let wide = WideParams::default();
+    let hashes: Vec<u64> =
+        pools.iter().map(|p| p.install(|| WideBvh::build(&spheres, &params, &wide).tree_hash())).collect();
+    assert!(hashes.iter().all(|&h| h == hashes[0]), "wide tree hashes {hashes:x?} in {THREADS:?}-thread pools");
 }

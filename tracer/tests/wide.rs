@@ -6,7 +6,7 @@
 
 use glam::Vec3;
 use tracer::accel::bvh::builder;
-use tracer::accel::wide::collapse::collapse;
+use tracer::accel::wide::collapse::{PARALLEL_COLLAPSE_MIN_PRIMS, collapse};
 use tracer::accel::wide::leaf::Block;
 use tracer::accel::wide::{ChildOrdering, Kernel, WideBvh, WideParams};
 use tracer::accel::{AccelKind, AccelParams, Accelerator, BuiltAccel, BvhParams, Hit, Split};
@@ -136,7 +136,10 @@ fn every_kernel_gives_the_same_hits_and_counts_on_the_same_tree() {
 
 #[test]
 fn same_seed_same_tree_and_counts_in_any_thread_count() {
-    let spheres = SceneKind::RandomSpheres.generate(12_000, 5).spheres;
+    // Enough spheres to collapse in parallel below the root.
+    const SPHERES: usize = 12_000;
+    const _: () = assert!(SPHERES >= PARALLEL_COLLAPSE_MIN_PRIMS);
+    let spheres = SceneKind::RandomSpheres.generate(SPHERES, 5).spheres;
     let rays = testing::sphere_ray_mix(&spheres, 3, 500);
     let bvh = BvhParams { split: Split::BinnedSah, leaf_size: 4, ..BvhParams::default() };
     let pool = |t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
@@ -155,7 +158,7 @@ fn same_seed_same_tree_and_counts_in_any_thread_count() {
             assert_eq!(t.stats(), trees[0].stats());
             assert_eq!(counts(t), counts(&trees[0]));
         }
-        let other = WideBvh::build(&SceneKind::RandomSpheres.generate(12_000, 6).spheres, &bvh, &wide);
+        let other = WideBvh::build(&SceneKind::RandomSpheres.generate(SPHERES, 6).spheres, &bvh, &wide);
         assert_ne!(other.tree_hash(), trees[0].tree_hash());
     }
 }

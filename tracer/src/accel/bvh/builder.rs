@@ -10,6 +10,10 @@
 //! back in the serial order above, so the tree (nodes, their order, the primitive order) is identical
 //! whatever the thread count. With one thread, and in subtrees below the threshold, it is the plain serial
 //! recursion.
+//!
+//! The top nodes, split one at a time before their subtrees run in parallel, would leave the other threads idle:
+//! so with more than one thread the O(n) passes before and after the recursion (the per-primitive arrays, the
+//! root's bounds) run in parallel, and the binned SAH bins large nodes in parallel (see [`binned_sah`]).
 
 use glam::Vec3;
 
@@ -97,6 +101,9 @@ fn build_with(spheres: &[Sphere], params: &BvhParams, block: u32, leaf_below: us
     if let Err(e) = params.validate() {
         panic!("invalid BVH parameters: {e}");
     }
+    if spheres.len() >= PARALLEL_MIN_PRIMS && rayon::current_num_threads() > 1 {
+        return parallel::build_with(spheres, params, block, leaf_below);
+    }
     // Only the sweep reads boxes by id; the other rules read a node's spheres through its `PrimRef`s.
     let boxes: Vec<Aabb> =
         if params.split == Split::SweepSah { spheres.iter().map(Sphere::bounds).collect() } else { Vec::new() };
@@ -105,14 +112,9 @@ fn build_with(spheres: &[Sphere], params: &BvhParams, block: u32, leaf_below: us
     let mut prims: Vec<u32> = (0..spheres.len() as u32).collect();
     let mut refs: Vec<PrimRef> = spheres.iter().map(PrimRef::new).collect();
     let root = NodeBounds::of(&refs);
-    let nodes = if spheres.len() >= PARALLEL_MIN_PRIMS && rayon::current_num_threads() > 1 {
-        parallel::build(inputs, &mut prims, &mut refs, root)
-    } else {
-        let mut b = Builder::new(inputs, spheres.len());
-        b.build_node(0, &mut prims, &mut refs, root, 0, 0);
-        b.nodes
-    };
-    BuiltTree { nodes, prim_order: prims, ordered_spheres: refs.iter().map(PrimRef::sphere).collect() }
+    let mut b = Builder::new(inputs, spheres.len());
+    b.build_node(0, &mut prims, &mut refs, root, 0, 0);
+    BuiltTree { nodes: b.nodes, prim_order: prims, ordered_spheres: refs.iter().map(PrimRef::sphere).collect() }
 }
 
 fn ceil_log2(n: usize) -> usize {
@@ -266,8 +268,29 @@ mod parallel {
         len: usize,
     }
 
+    /// Primitives per task of the O(n) passes around the recursion (the per-primitive arrays, the root's bounds).
+    const PASS_CHUNK: usize = 1 << 14;
+
+    /// [`super::build_with`] with the per-primitive arrays, the root's bounds and the recursion in parallel.
+    pub(super) fn build_with(spheres: &[Sphere], params: &BvhParams, block: u32, leaf_below: usize) -> BuiltTree {
+        use rayon::prelude::*;
+        let boxes: Vec<Aabb> = match params.split {
+            Split::SweepSah => spheres.par_iter().with_min_len(PASS_CHUNK).map(Sphere::bounds).collect(),
+            _ => Vec::new(),
+        };
+        let centroids: Vec<Vec3> = spheres.par_iter().with_min_len(PASS_CHUNK).map(|s| s.center).collect();
+        let inputs = Inputs { params, block, leaf_below, spheres, boxes: &boxes, centroids: &centroids };
+        let mut prims: Vec<u32> = (0..spheres.len() as u32).into_par_iter().with_min_len(PASS_CHUNK).collect();
+        let mut refs: Vec<PrimRef> = spheres.par_iter().with_min_len(PASS_CHUNK).map(PrimRef::new).collect();
+        // The union of the chunks' bounds is that of the serial pass: minima and maxima in any order.
+        let root = refs.par_chunks(PASS_CHUNK).map(NodeBounds::of).reduce_with(NodeBounds::union);
+        let nodes = build(inputs, &mut prims, &mut refs, root.unwrap_or(NodeBounds::EMPTY));
+        let ordered_spheres = refs.par_iter().with_min_len(PASS_CHUNK).map(PrimRef::sphere).collect();
+        BuiltTree { nodes, prim_order: prims, ordered_spheres }
+    }
+
     /// Builds the whole tree; `prims.len() >= PARALLEL_MIN_PRIMS`.
-    pub(super) fn build(inputs: Inputs<'_>, prims: &mut [u32], refs: &mut [PrimRef], nb: NodeBounds) -> Vec<FlatNode> {
+    fn build(inputs: Inputs<'_>, prims: &mut [u32], refs: &mut [PrimRef], nb: NodeBounds) -> Vec<FlatNode> {
         let (root, desc) = subtree(inputs, prims, refs, nb, 0, 0);
         let mut nodes = Vec::with_capacity(1 + desc.len);
         // Descendant-relative index i is array index 1 + i.

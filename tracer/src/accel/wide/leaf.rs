@@ -30,19 +30,35 @@ impl<const B: usize> Block<B> {
     pub const PADDING: Self =
         Self { cx: [f32::NAN; B], cy: [f32::NAN; B], cz: [f32::NAN; B], r2: [f32::NAN; B], ids: [PAD; B] };
 
+    /// The block of (at most `B`) `spheres`, whose scene indices are `ids`, padded.
+    #[inline(always)]
+    fn of(spheres: &[Sphere], ids: &[u32]) -> Self {
+        let mut block = Self::PADDING;
+        for (lane, (s, &id)) in spheres.iter().zip(ids).enumerate() {
+            block.cx[lane] = s.center.x;
+            block.cy[lane] = s.center.y;
+            block.cz[lane] = s.center.z;
+            block.r2[lane] = s.radius * s.radius;
+            block.ids[lane] = id;
+        }
+        block
+    }
+
     /// Appends blocks holding `spheres` (whose scene indices are `ids`), the last one padded; returns how many.
     pub fn append(out: &mut Vec<Self>, spheres: &[Sphere], ids: &[u32]) -> usize {
         assert_eq!(spheres.len(), ids.len());
         for (spheres, ids) in spheres.chunks(B).zip(ids.chunks(B)) {
-            let mut block = Self::PADDING;
-            for (lane, (s, &id)) in spheres.iter().zip(ids).enumerate() {
-                block.cx[lane] = s.center.x;
-                block.cy[lane] = s.center.y;
-                block.cz[lane] = s.center.z;
-                block.r2[lane] = s.radius * s.radius;
-                block.ids[lane] = id;
-            }
-            out.push(block);
+            out.push(Self::of(spheres, ids));
+        }
+        ids.len().div_ceil(B)
+    }
+
+    /// [`Block::append`] into the first blocks of `out`, which must have room; returns how many.
+    pub fn write(out: &mut [Self], spheres: &[Sphere], ids: &[u32]) -> usize {
+        assert_eq!(spheres.len(), ids.len());
+        for (block, (spheres, ids)) in out[..ids.len().div_ceil(B)].iter_mut().zip(spheres.chunks(B).zip(ids.chunks(B)))
+        {
+            *block = Self::of(spheres, ids);
         }
         ids.len().div_ceil(B)
     }
@@ -76,5 +92,9 @@ mod tests {
         assert_eq!(blocks[0].ids, [10, 9, 8, 7]);
         assert_eq!((blocks[2].cx[2], blocks[2].r2[2]), (0.0, 0.25));
         assert!(blocks[2].cx[3].is_nan() && blocks[2].ids[3] == PAD);
+        let mut written = [Block::<4>::PADDING; 4];
+        assert_eq!(Block::write(&mut written, &ordered, &ids), 3);
+        assert_eq!(format!("{:?}", &written[..3]), format!("{blocks:?}"), "the blocks of append (NaN padding)");
+        assert!(written[3].is_empty());
     }
 }

@@ -60,6 +60,19 @@ impl ChildRef {
         let first = ((self.0 & !Self::LEAF) >> Self::COUNT_BITS) as usize;
         first..first + (self.0 & Self::MAX_BLOCKS) as usize
     }
+
+    /// The same child in a tree whose nodes start `nodes` and blocks `blocks` further on (empty stays empty).
+    #[inline(always)]
+    pub fn shifted(self, nodes: u32, blocks: u32) -> Self {
+        if self.is_node() {
+            Self::node(self.0 + nodes)
+        } else if self.is_leaf() {
+            let range = self.blocks();
+            Self::leaf(range.start as u32 + blocks, range.len() as u32)
+        } else {
+            self
+        }
+    }
 }
 
 /// Rows of [`WideNode::bounds`]: `2 * axis` holds the children's minima on `axis`, `2 * axis + 1` their maxima.
@@ -175,6 +188,8 @@ mod tests {
         assert!(node.is_node() && !node.is_leaf());
         assert_eq!(node.index(), 77);
         assert!(!ChildRef::EMPTY.is_leaf() && !ChildRef::EMPTY.is_node());
+        assert_eq!((leaf.shifted(5, 100), node.shifted(5, 100)), (ChildRef::leaf(1334, 3), ChildRef::node(82)));
+        assert_eq!(ChildRef::EMPTY.shifted(5, 100), ChildRef::EMPTY);
     }
 
     #[test]

@@ -60,6 +60,11 @@ impl NodeBounds {
         }
         NodeBounds { bounds: bounds.aabb(), centroids: centroids.aabb() }
     }
+
+    /// The bounds of both nodes' primitives together.
+    pub fn union(self, other: Self) -> Self {
+        NodeBounds { bounds: self.bounds.union(&other.bounds), centroids: self.centroids.union(&other.centroids) }
+    }
 }
 
 /// Moves the primitives (ids and their [`PrimRef`]s alike) for which `left` holds to the front; returns how many
