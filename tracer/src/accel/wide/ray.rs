@@ -3,7 +3,7 @@
 use crate::geometry::{Ray, RayBoxTester};
 
 /// A ray's origin, direction, reciprocal direction, slab rows and octant, computed once per ray.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct RayLanes {
     /// Origin x, y, z.
     pub origin: [f32; 3],

@@ -286,9 +286,10 @@ impl<C: Counters> Query for ClosestTiles<'_, C> {
     type Out = ();
     #[inline(always)]
     unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) {
+        let packet = &mut Packet::empty();
         for (rays, out) in self.rays.chunks(TILE_RAYS).zip(self.out.chunks_mut(TILE_RAYS)) {
             (0..rays.len()).for_each(|_| self.counters.ray());
-            let packet = &mut Packet::new(rays);
+            packet.load(rays);
             let frustum = &FrustumLanes::new(&packet.lanes[..rays.len()]);
             let counters = &mut *self.counters;
             // SAFETY (both): forwarded from the caller.
@@ -305,9 +306,10 @@ impl<C: Counters> Query for AnyTiles<'_, C> {
     type Out = ();
     #[inline(always)]
     unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) {
+        let packet = &mut Packet::empty();
         for (rays, out) in self.rays.chunks(TILE_RAYS).zip(self.out.chunks_mut(TILE_RAYS)) {
             (0..rays.len()).for_each(|_| self.counters.ray());
-            let packet = &mut Packet::new(rays);
+            packet.load(rays);
             let frustum = &FrustumLanes::new(&packet.lanes[..rays.len()]);
             let counters = &mut *self.counters;
             // SAFETY (both): forwarded from the caller.
