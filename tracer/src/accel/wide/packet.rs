@@ -116,6 +116,17 @@ impl<const P: usize> Packet<P> {
         }
         self.best = [PAD; P];
     }
+
+    /// Writes the closest hits of the first `out.len()` rays ([`PrimaryHits::MISS`] where none).
+    #[inline(always)]
+    pub(super) fn write_closest(&self, out: &mut [Hit]) {
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = match self.best[i] {
+                PAD => PrimaryHits::MISS,
+                prim => Hit { t: self.t_max[i], prim },
+            };
+        }
+    }
 }
 
 /// Iterates the set bits of a mask.
@@ -204,26 +215,76 @@ pub(super) unsafe fn closest<K: Ops, C: Counters, const W: usize, const B: usize
             unsafe { enter::<K, C, W, B, P>(tree, e.child, active, packet, &mut stack, counters) };
             continue;
         }
-        debug_assert!(e.child.blocks().end <= tree.blocks.len());
-        // SAFETY: leaf references name blocks the collapse emitted.
-        for block in unsafe { tree.blocks.get_unchecked(e.child.blocks()) } {
-            for i in bits(active) {
-                if C::ENABLED {
-                    (0..block.len()).for_each(|_| counters.prim_test());
-                }
-                // SAFETY: forwarded from the caller.
-                if let Some((t, lane)) = unsafe { K::closest(block, &packet.lanes[i], packet.t_max[i]) } {
-                    packet.t_max[i] = t;
-                    packet.best[i] = block.ids[lane];
-                }
+        // SAFETY: forwarded from the caller.
+        unsafe { leaf_closest::<K, C, W, B, P>(tree, e.child, active, packet, counters) };
+    }
+    packet.write_closest(out);
+}
+
+/// The `active` rays test the blocks of `leaf`, each keeping a nearer hit; true when some ray's hit got nearer.
+///
+/// # Safety
+/// The CPU supports `K`'s instructions; `leaf` is a leaf of `tree`.
+#[inline(always)]
+pub(super) unsafe fn leaf_closest<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
+    tree: &Tree<W, B>,
+    leaf: ChildRef,
+    active: u64,
+    packet: &mut Packet<P>,
+    counters: &mut C,
+) -> bool {
+    debug_assert!(leaf.blocks().end <= tree.blocks.len());
+    let mut nearer = false;
+    // SAFETY: leaf references name blocks the collapse emitted.
+    for block in unsafe { tree.blocks.get_unchecked(leaf.blocks()) } {
+        for i in bits(active) {
+            if C::ENABLED {
+                (0..block.len()).for_each(|_| counters.prim_test());
+            }
+            // SAFETY: forwarded from the caller.
+            if let Some((t, lane)) = unsafe { K::closest(block, &packet.lanes[i], packet.t_max[i]) } {
+                packet.t_max[i] = t;
+                packet.best[i] = block.ids[lane];
+                nearer = true;
             }
         }
     }
+    nearer
+}
+
+/// The `active` rays of `unoccluded` test the blocks of `leaf`; returns `unoccluded` without the rays that hit.
+///
+/// # Safety
+/// The CPU supports `K`'s instructions; `leaf` is a leaf of `tree`.
+#[inline(always)]
+pub(super) unsafe fn leaf_any<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
+    tree: &Tree<W, B>,
+    leaf: ChildRef,
+    active: u64,
+    mut unoccluded: u64,
+    packet: &Packet<P>,
+    counters: &mut C,
+) -> u64 {
+    // SAFETY: as in `leaf_closest`.
+    for block in unsafe { tree.blocks.get_unchecked(leaf.blocks()) } {
+        for i in bits(active & unoccluded) {
+            if C::ENABLED {
+                (0..block.len()).for_each(|_| counters.prim_test());
+            }
+            // SAFETY: forwarded from the caller.
+            if unsafe { K::any(block, &packet.lanes[i], packet.t_max[i]) } {
+                unoccluded &= !(1 << i);
+            }
+        }
+    }
+    unoccluded
+}
+
+/// Writes the occlusion of the first `out.len()` rays: occluded unless their bit of `unoccluded` is set.
+#[inline(always)]
+pub(super) fn write_occluded(unoccluded: u64, out: &mut [bool]) {
     for (i, o) in out.iter_mut().enumerate() {
-        *o = match packet.best[i] {
-            PAD => PrimaryHits::MISS,
-            prim => Hit { t: packet.t_max[i], prim },
-        };
+        *o = unoccluded >> i & 1 == 0;
     }
 }
 
@@ -251,25 +312,13 @@ pub(super) unsafe fn any<K: Ops, C: Counters, const W: usize, const B: usize, co
             unsafe { enter::<K, C, W, B, P>(tree, e.child, active, packet, &mut stack, counters) };
             continue;
         }
-        // SAFETY: as in `closest`.
-        for block in unsafe { tree.blocks.get_unchecked(e.child.blocks()) } {
-            for i in bits(active & unoccluded) {
-                if C::ENABLED {
-                    (0..block.len()).for_each(|_| counters.prim_test());
-                }
-                // SAFETY: forwarded from the caller.
-                if unsafe { K::any(block, &packet.lanes[i], packet.t_max[i]) } {
-                    unoccluded &= !(1 << i);
-                }
-            }
-        }
+        // SAFETY: forwarded from the caller.
+        unoccluded = unsafe { leaf_any::<K, C, W, B, P>(tree, e.child, active, unoccluded, packet, counters) };
         if unoccluded == 0 {
             break;
         }
     }
-    for (i, o) in out.iter_mut().enumerate() {
-        *o = unoccluded >> i & 1 == 0;
-    }
+    write_occluded(unoccluded, out);
 }
 
 /// Nearest hits of a batch in packets of `P` ([`PrimaryHits::MISS`] for misses), one `ray` count per ray.

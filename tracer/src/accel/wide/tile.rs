@@ -27,7 +27,6 @@
 
 use super::collapse::Tree;
 use super::kernel::{Ops, Query};
-use super::leaf::PAD;
 use super::node::ChildRef;
 use super::order::Order;
 use super::packet::{self, CULL_SLACK, Entry, Packet, Stack, all, bits, still_wanted};
@@ -35,7 +34,6 @@ use super::ray::FrustumLanes;
 use crate::accel::Hit;
 use crate::counters::Counters;
 use crate::geometry::Ray;
-use crate::render::PrimaryHits;
 
 /// Rays of a tile packet: an 8×8 tile.
 pub const TILE_RAYS: usize = 64;
@@ -149,32 +147,12 @@ unsafe fn closest<K: Ops, C: Counters, const W: usize, const B: usize>(
             unsafe { enter::<K, C, W, B>(tree, e.child, active, packet, frustum, t_far, &mut stack, counters) };
             continue;
         }
-        debug_assert!(e.child.blocks().end <= tree.blocks.len());
-        let mut hit = false;
-        // SAFETY: leaf references name blocks the collapse emitted.
-        for block in unsafe { tree.blocks.get_unchecked(e.child.blocks()) } {
-            for i in bits(active) {
-                if C::ENABLED {
-                    (0..block.len()).for_each(|_| counters.prim_test());
-                }
-                // SAFETY: forwarded from the caller.
-                if let Some((t, lane)) = unsafe { K::closest(block, &packet.lanes[i], packet.t_max[i]) } {
-                    packet.t_max[i] = t;
-                    packet.best[i] = block.ids[lane];
-                    hit = true;
-                }
-            }
-        }
-        if hit {
+        // SAFETY: forwarded from the caller.
+        if unsafe { packet::leaf_closest::<K, C, W, B, TILE_RAYS>(tree, e.child, active, packet, counters) } {
             t_far = farthest(&packet.t_max);
         }
     }
-    for (i, o) in out.iter_mut().enumerate() {
-        *o = match packet.best[i] {
-            PAD => PrimaryHits::MISS,
-            prim => Hit { t: packet.t_max[i], prim },
-        };
-    }
+    packet.write_closest(out);
 }
 
 /// Occlusion of up to [`TILE_RAYS`] rays into `out`.
@@ -203,25 +181,14 @@ unsafe fn any<K: Ops, C: Counters, const W: usize, const B: usize>(
             unsafe { enter::<K, C, W, B>(tree, e.child, active, packet, frustum, t_far, &mut stack, counters) };
             continue;
         }
-        // SAFETY: as in `closest`.
-        for block in unsafe { tree.blocks.get_unchecked(e.child.blocks()) } {
-            for i in bits(active & unoccluded) {
-                if C::ENABLED {
-                    (0..block.len()).for_each(|_| counters.prim_test());
-                }
-                // SAFETY: forwarded from the caller.
-                if unsafe { K::any(block, &packet.lanes[i], packet.t_max[i]) } {
-                    unoccluded &= !(1 << i);
-                }
-            }
-        }
+        // SAFETY: forwarded from the caller.
+        unoccluded =
+            unsafe { packet::leaf_any::<K, C, W, B, TILE_RAYS>(tree, e.child, active, unoccluded, packet, counters) };
         if unoccluded == 0 {
             break;
         }
     }
-    for (i, o) in out.iter_mut().enumerate() {
-        *o = unoccluded >> i & 1 == 0;
-    }
+    packet::write_occluded(unoccluded, out);
 }
 
 /// Nearest hits of a batch in tile packets of [`TILE_RAYS`] consecutive rays, one `ray` count per ray.
