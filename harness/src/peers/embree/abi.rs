@@ -61,6 +61,42 @@ pub const LANE_ACTIVE: c_int = -1;
 /// An inactive lane.
 pub const LANE_INACTIVE: c_int = 0;
 
+/// The `valid` lane mask of `rtcIntersect8` (one `c_int` per lane), aligned like its packet: Embree's wide kernels
+/// load it with aligned vector loads.
+#[repr(C, align(32))]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ValidMask8(pub [c_int; 8]);
+
+/// The `valid` lane mask of `rtcIntersect16`, aligned to 64 bytes (AVX-512 loads it aligned: a 4-byte aligned
+/// stack array crashed `rtcIntersect16` on an AVX-512 CPU).
+#[repr(C, align(64))]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ValidMask16(pub [c_int; 16]);
+
+/// The byte alignment Embree requires of an N-lane packet and of its `valid` mask: 4 × N (16, 32 or 64).
+pub const fn packet_alignment(lanes: usize) -> usize {
+    4 * lanes
+}
+
+/// `ptr` as handed to Embree, after checking it has `align` bytes of alignment; a misaligned pointer panics with
+/// what it was (every machine checks, not only those whose wide loads would fault).
+#[inline(always)]
+#[track_caller]
+pub fn aligned<T>(ptr: *const T, align: usize, what: &str) -> *const T {
+    assert!(
+        (ptr as usize).is_multiple_of(align),
+        "Embree needs {what} aligned to {align} bytes, got address {ptr:p}"
+    );
+    ptr
+}
+
+/// [`aligned`] for a pointer Embree writes through.
+#[inline(always)]
+#[track_caller]
+pub fn aligned_mut<T>(ptr: *mut T, align: usize, what: &str) -> *mut T {
+    aligned(ptr.cast_const(), align, what).cast_mut()
+}
+
 /// `struct RTCRay`: one ray (48 bytes, align 16).
 #[repr(C, align(16))]
 #[derive(Clone, Copy, Debug, Default)]
@@ -199,8 +235,14 @@ pub struct RTCRayHit16 {
 /// A packet `RTCRayHitN` of N lanes, aligned as `rtcIntersectN` requires: what the width-generic query code fills
 /// and reads.
 pub trait RTCRayHitN<const N: usize>: Copy {
+    /// The `valid` mask type of this width ([`ValidMask8`], [`ValidMask16`]).
+    type Valid: Copy;
     /// N inactive lanes and empty hits.
     const INACTIVE: Self;
+    /// A mask with every lane inactive.
+    const NO_LANES: Self::Valid;
+    /// The lanes of a mask.
+    fn lanes(valid: &mut Self::Valid) -> &mut [c_int; N];
     /// The rays, to fill the active lanes.
     fn ray_mut(&mut self) -> &mut RTCRayN<N>;
     /// The rays (`tfar` is the hit distance after the query) and their hits.
@@ -208,9 +250,15 @@ pub trait RTCRayHitN<const N: usize>: Copy {
 }
 
 macro_rules! ray_hit_n {
-    ($($packet:ident = $n:literal),+) => {$(
+    ($($packet:ident, $valid:ident = $n:literal),+) => {$(
         impl RTCRayHitN<$n> for $packet {
+            type Valid = $valid;
             const INACTIVE: Self = Self { ray: RTCRayN::INACTIVE, hit: RTCHitN::EMPTY };
+            const NO_LANES: $valid = $valid([LANE_INACTIVE; $n]);
+            #[inline(always)]
+            fn lanes(valid: &mut $valid) -> &mut [c_int; $n] {
+                &mut valid.0
+            }
             #[inline(always)]
             fn ray_mut(&mut self) -> &mut RTCRayN<$n> {
                 &mut self.ray
@@ -223,7 +271,7 @@ macro_rules! ray_hit_n {
     )+};
 }
 
-ray_hit_n!(RTCRayHit8 = 8, RTCRayHit16 = 16);
+ray_hit_n!(RTCRayHit8, ValidMask8 = 8, RTCRayHit16, ValidMask16 = 16);
 
 /// `struct RTCIntersectArguments` (32 bytes); `RTCOccludedArguments` has the same layout.
 #[repr(C)]
@@ -253,6 +301,9 @@ const _: () = assert!(size_of::<RTCRayHit16>() == 768 + 576 && align_of::<RTCRay
 const _: () = assert!(std::mem::offset_of!(RTCRayHit16, hit) == 768);
 const _: () = assert!(std::mem::offset_of!(RTCHit16, instPrimID) == 16 * 32);
 const _: () = assert!(size_of::<RTCIntersectArguments>() == 32 && align_of::<RTCIntersectArguments>() == 8);
+const _: () = assert!(align_of::<ValidMask8>() == packet_alignment(8) && size_of::<ValidMask8>() == 32);
+const _: () = assert!(align_of::<ValidMask16>() == packet_alignment(16) && size_of::<ValidMask16>() == 64);
+const _: () = assert!(align_of::<RTCRayHit8>() == packet_alignment(8) && align_of::<RTCRayHit16>() == packet_alignment(16));
 
 /// `RTCErrorFunction`: `void (*)(void* userPtr, RTCError code, const char* str)`.
 pub type RTCErrorFunction = unsafe extern "C" fn(user: *mut c_void, code: u32, message: *const c_char);

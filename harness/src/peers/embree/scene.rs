@@ -1,5 +1,6 @@
 //! A committed Embree scene of sphere points: single-ray and 8- and 16-wide packet queries.
 
+use std::ffi::c_int;
 use std::sync::Arc;
 
 use tracer::accel::{Accelerator, Hit, TreeStats};
@@ -109,7 +110,8 @@ impl EmbreeSpheres {
         let result = if buffer.is_null() {
             Err(EmbreeError::Api(self.device.take_error().unwrap_or_else(|| "rtcSetNewGeometryBuffer failed".into())))
         } else {
-            // SAFETY: Embree returned a writable buffer of `len` FLOAT4 items, 16-byte aligned.
+            let buffer = aligned_mut(buffer, 16, "the FLOAT4 vertex buffer Embree returned");
+            // SAFETY: Embree returned a writable buffer of `len` FLOAT4 items, 16-byte aligned (checked).
             let items = unsafe { std::slice::from_raw_parts_mut(buffer, spheres.len()) };
             for (item, s) in items.iter_mut().zip(spheres) {
                 *item = [s.center.x, s.center.y, s.center.z, s.radius];
@@ -150,23 +152,54 @@ impl EmbreeSpheres {
         query: FnIntersectN<P>,
         rays: &[Ray],
     ) -> [Option<Hit>; N] {
+        let mut call = PacketCall::<N, P>::new(rays);
+        let (valid, packet) = call.pointers();
+        // SAFETY: a committed scene; the packet and its mask have the alignment `rtcIntersectN` requires (checked
+        // by `pointers`), N lanes each, and are fully initialized; NULL arguments = defaults.
+        unsafe { query(valid, self.scene, packet, std::ptr::null_mut()) };
+        call.hits()
+    }
+}
+
+/// The arguments of one `rtcIntersectN` call: the `valid` lane mask and the ray packet, each of the packet
+/// width's alignment type.
+pub(super) struct PacketCall<const N: usize, P: RTCRayHitN<N>> {
+    valid: P::Valid,
+    packet: P,
+}
+
+impl<const N: usize, P: RTCRayHitN<N>> PacketCall<N, P> {
+    /// Up to N rays in the first lanes; the rest inactive, holding a harmless, well-formed ray.
+    #[inline(always)]
+    pub(super) fn new(rays: &[Ray]) -> Self {
         assert!(rays.len() <= N, "intersect{N} takes at most {N} rays, got {}", rays.len());
-        let mut valid = [LANE_INACTIVE; N];
-        // Inactive lanes hold a harmless, well-formed ray.
-        let mut packet = P::INACTIVE;
-        let r = packet.ray_mut();
+        let mut call = Self { valid: P::NO_LANES, packet: P::INACTIVE };
+        let lanes = P::lanes(&mut call.valid);
+        let r = call.packet.ray_mut();
         for (i, ray) in rays.iter().enumerate() {
-            valid[i] = LANE_ACTIVE;
+            lanes[i] = LANE_ACTIVE;
             (r.org_x[i], r.org_y[i], r.org_z[i]) = (ray.origin.x, ray.origin.y, ray.origin.z);
             (r.dir_x[i], r.dir_y[i], r.dir_z[i]) = (ray.dir.x, ray.dir.y, ray.dir.z);
             (r.tnear[i], r.tfar[i]) = (ray.t_min, ray.t_max);
         }
-        // SAFETY: a committed scene; `packet` has the alignment `rtcIntersectN` requires (its type's: 32 bytes for 8
-        // lanes, 64 for 16), `valid` has N lanes, and both are fully initialized; NULL arguments = defaults.
-        unsafe { query(valid.as_ptr(), self.scene, &mut packet, std::ptr::null_mut()) };
-        let (ray, hit) = packet.parts();
+        call
+    }
+
+    /// The mask and packet pointers to hand to `rtcIntersectN`, checked to be aligned to 4 × N bytes.
+    #[inline(always)]
+    pub(super) fn pointers(&mut self) -> (*const c_int, *mut P) {
+        let align = packet_alignment(N);
+        let valid = aligned(std::ptr::from_ref(&self.valid).cast::<c_int>(), align, "the valid lane mask");
+        (valid, aligned_mut(&raw mut self.packet, align, "the ray packet"))
+    }
+
+    /// The hits of the active lanes after the call (`None` for misses and inactive lanes).
+    #[inline(always)]
+    fn hits(&mut self) -> [Option<Hit>; N] {
+        let lanes = *P::lanes(&mut self.valid);
+        let (ray, hit) = self.packet.parts();
         std::array::from_fn(|i| {
-            (valid[i] == LANE_ACTIVE && hit.geomID[i] != RTC_INVALID_GEOMETRY_ID)
+            (lanes[i] == LANE_ACTIVE && hit.geomID[i] != RTC_INVALID_GEOMETRY_ID)
                 .then(|| Hit { t: ray.tfar[i], prim: hit.primID[i] })
         })
     }
@@ -176,16 +209,18 @@ impl Accelerator for EmbreeSpheres {
     #[inline]
     fn intersect<C: Counters>(&self, ray: &Ray, _counters: &mut C) -> Option<Hit> {
         let mut rh = ray_hit(ray);
-        // SAFETY: a committed scene and a properly aligned, initialized RTCRayHit; NULL arguments = defaults.
-        unsafe { (self.device.lib.api.intersect1)(self.scene, &mut rh, std::ptr::null_mut()) };
+        let rh_ptr = aligned_mut(&raw mut rh, align_of::<RTCRayHit>(), "RTCRayHit");
+        // SAFETY: a committed scene and an initialized RTCRayHit, aligned as checked; NULL arguments = defaults.
+        unsafe { (self.device.lib.api.intersect1)(self.scene, rh_ptr, std::ptr::null_mut()) };
         (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID).then_some(Hit { t: rh.ray.tfar, prim: rh.hit.primID })
     }
 
     #[inline]
     fn occluded<C: Counters>(&self, ray: &Ray, _counters: &mut C) -> bool {
         let mut r = rtc_ray(ray);
-        // SAFETY: a committed scene and a properly aligned, initialized RTCRay; NULL arguments = defaults.
-        unsafe { (self.device.lib.api.occluded1)(self.scene, &mut r, std::ptr::null_mut()) };
+        let r_ptr = aligned_mut(&raw mut r, align_of::<RTCRay>(), "RTCRay");
+        // SAFETY: a committed scene and an initialized RTCRay, aligned as checked; NULL arguments = defaults.
+        unsafe { (self.device.lib.api.occluded1)(self.scene, r_ptr, std::ptr::null_mut()) };
         r.tfar == f32::NEG_INFINITY
     }
 

@@ -172,3 +172,57 @@ fn pinned_isa_sets_the_native_packet_width() {
         reference.assert_agrees(&format!("embree isa={isa}"), &scene, Tolerance::RelativeToScale);
     }
 }
+
+/// Runs `f` with the stack shifted by `PAD` bytes, so that locals land at other addresses modulo 64.
+#[inline(never)]
+fn with_stack_shifted<const PAD: usize>(f: &mut dyn FnMut()) {
+    let pad = [0u8; PAD];
+    std::hint::black_box(&pad);
+    f();
+    std::hint::black_box(&pad);
+}
+
+/// Prepares packet calls at four stack offsets (frames differ by 16 bytes, so a mask or packet aligned to less
+/// than 64 bytes lands misaligned in at least one of them): on any machine, a type with too little alignment
+/// makes `pointers` panic here instead of crashing only where Embree's AVX-512 kernels load it.
+#[test]
+fn packet_masks_and_rays_are_aligned_wherever_the_stack_puts_them() {
+    let rays = vec![Ray::new(tracer::Vec3::ZERO, tracer::Vec3::Z); 16];
+    let mut check = || {
+        let mut call8 = super::scene::PacketCall::<8, abi::RTCRayHit8>::new(&rays[..5]);
+        let (valid, packet) = call8.pointers();
+        assert!((valid as usize).is_multiple_of(32) && (packet as usize).is_multiple_of(32));
+        let mut call16 = super::scene::PacketCall::<16, abi::RTCRayHit16>::new(&rays);
+        let (valid, packet) = call16.pointers();
+        assert!((valid as usize).is_multiple_of(64) && (packet as usize).is_multiple_of(64));
+    };
+    with_stack_shifted::<1>(&mut check);
+    with_stack_shifted::<17>(&mut check);
+    with_stack_shifted::<33>(&mut check);
+    with_stack_shifted::<49>(&mut check);
+    // The shifts really move locals: a 4-byte aligned array (what the mask used to be) lands at other offsets.
+    let mut offsets = std::collections::BTreeSet::new();
+    let mut record = || {
+        let plain = [0i32; 16];
+        offsets.insert(std::hint::black_box(plain.as_ptr()) as usize % 64);
+    };
+    with_stack_shifted::<1>(&mut record);
+    with_stack_shifted::<17>(&mut record);
+    with_stack_shifted::<33>(&mut record);
+    with_stack_shifted::<49>(&mut record);
+    assert!(offsets.len() > 1 && offsets.iter().any(|&o| o != 0), "the stack shifts moved nothing: {offsets:?}");
+}
+
+#[test]
+fn the_alignment_check_rejects_a_misaligned_pointer() {
+    let storage = abi::ValidMask16([0; 16]);
+    let base = std::ptr::from_ref(&storage).cast::<u8>();
+    assert_eq!(abi::aligned(base, 64, "a mask"), base);
+    for offset in [4, 8, 16, 32] {
+        let shifted = base.wrapping_add(offset);
+        let result = std::panic::catch_unwind(|| abi::aligned(shifted, 64, "a mask"));
+        assert!(result.is_err(), "address {shifted:p} (offset {offset}) passed a 64-byte alignment check");
+    }
+    let ray_hit = std::ptr::from_ref(&abi::RTCRayHit::default()).cast::<u8>();
+    assert!(std::panic::catch_unwind(|| abi::aligned(ray_hit.wrapping_add(8), 16, "RTCRayHit")).is_err());
+}
