@@ -277,13 +277,13 @@ fn build_once(root: &Path, build: &Build, rev: &str, ab: &Path) -> Result<Option
             .lines()
             .filter(|l| l.contains("error") || !progress.iter().any(|p| l.trim_start().starts_with(p)))
             .collect();
-        eprintln!("{}", lines[lines.len().saturating_sub(40)..].join("\n"));
+        note!("{}", lines[lines.len().saturating_sub(40)..].join("\n"));
         return Err(Error::Run(format!("building {rev} failed (cargo's messages above)")));
     }
     match built(&stderr, &name) {
         Ok(Built::Binary(binary)) => Ok(Some(binary)),
         Ok(Built::Stale(line)) => {
-            eprintln!("ab: cargo took another base build's artifacts ({line}): building again");
+            note!("ab: cargo took another base build's artifacts ({line}): building again");
             Ok(None)
         }
         Err(why) => Err(Error::Run(format!("building {rev}: {why}"))),
@@ -332,17 +332,17 @@ fn base_binary(root: &Path, build: &Build, rev: &str) -> Result<PathBuf, Error> 
     fs::create_dir_all(&ab).map_err(|e| Error::Run(format!("{}: {e}", ab.display())))?;
     let cache = ab.join(cache_name(rev, &build.folder, &rustc_version(root)));
     if cache.is_file() {
-        eprintln!("ab: base {}: {} (built before)", &rev[..12], cache.display());
+        note!("ab: base {}: {} (built before)", &rev[..12], cache.display());
         return Ok(cache);
     }
     if let Some(why) = running_is_build_of(root, rev) {
         fs::copy("/proc/self/exe", &cache)
             .or_else(|_| fs::copy(build.uplifted(), &cache))
             .map_err(|e| Error::Run(format!("{}: {e}", cache.display())))?;
-        eprintln!("ab: base {}: this binary, copied to {} ({why})", &rev[..12], cache.display());
+        note!("ab: base {}: this binary, copied to {} ({why})", &rev[..12], cache.display());
         return Ok(cache);
     }
-    eprintln!("ab: building {rev} into {} (its workspace crates only)", build.target.display());
+    note!("ab: building {rev} into {} (its workspace crates only)", build.target.display());
     let mut uplifted = Uplifted::save(build, &ab);
     for _ in 0..3 {
         if let Some(binary) = build_once(root, build, rev, &ab)? {
@@ -533,7 +533,7 @@ fn measure(
                 pair.new.push(new.trace_s);
             }
         }
-        eprintln!("ab: {what} round {}/{} done", round + 1, warmups + repetitions);
+        note!("ab: {what} round {}/{} done", round + 1, warmups + repetitions);
     }
     Ok(pairs)
 }
@@ -562,7 +562,7 @@ pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
         .collect();
     let mut again: Vec<Option<Pair>> = all.iter().map(|_| None).collect();
     if !flagged.is_empty() {
-        eprintln!("ab: {} configuration(s) flagged as slower: measuring them again", flagged.len());
+        note!("ab: {} configuration(s) flagged as slower: measuring them again", flagged.len());
         let configurations: Vec<&Configuration> = flagged.iter().map(|&i| all[i]).collect();
         let second = measure(&plan, &configurations, rounds, bins, &root, "confirmation")?;
         for (&i, pair) in flagged.iter().zip(second) {
@@ -571,18 +571,18 @@ pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
             again[i] = Some(pair);
         }
     }
-    println!("## A/B: {} (new, this build) against {} (old, {})\n", exp.name, &rev[..12], request.base);
-    println!(
+    say!("## A/B: {} (new, this build) against {} (old, {})\n", exp.name, &rev[..12], request.base);
+    say!(
         "Trace time per configuration, new / old (below 1: faster), 95% bootstrap interval; {} rounds, interleaved. \
          A single-thread configuration flagged as slower is measured again the same way and fails only if that \
          agrees.\n",
         exp.repetitions.max()
     );
-    println!(
+    say!(
         "| series | settings | old median (s) | new median (s) | new / old [95% CI] | verdict | measured again: new / old \
          [95% CI], verdict | output |"
     );
-    println!("|---|---|---|---|---|---|---|---|");
+    say!("|---|---|---|---|---|---|---|---|");
     let mut results = vec![];
     for (i, c) in all.iter().enumerate() {
         let (first, e) = speed(c, &pairs[i]);
@@ -592,7 +592,7 @@ pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
             format!("{:.3} [{:.3}, {:.3}], {}", e2.value, e2.lo, e2.hi, s.label())
         });
         let answers = Answers::of(&pairs[i].old_answers, &pairs[i].new_answers);
-        println!(
+        say!(
             "| {} | {:.6} | {:.6} | {:.3} [{:.3}, {:.3}] | {} | {} | {} |",
             describe(c),
             report::stats::median(&pairs[i].old),

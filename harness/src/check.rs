@@ -51,7 +51,7 @@ pub fn run(request: &CheckRequest<'_>) -> Result<(), Error> {
     let spec = exp.report_spec(vec![]);
     let input = |e: report::Error| Error::Input(e.to_string());
     let mut outcome = compare(request.run_dir, request.baseline, &spec, &request.options).map_err(input)?;
-    println!("{}", outcome.mode.line());
+    say!("{}", outcome.mode.line());
     let confirm_csv = request.run_dir.join(CONFIRM_CSV);
     let _ = std::fs::remove_file(&confirm_csv); // a file from an earlier check would be taken for this one's
     let flagged = outcome.to_confirm();
@@ -62,7 +62,7 @@ pub fn run(request: &CheckRequest<'_>) -> Result<(), Error> {
             .filter(|t| t.flagged())
             .map(|t| format!("{} {} {}", t.series, t.settings, t.metric))
             .collect();
-        println!(
+        say!(
             "measuring {} flagged configuration(s) again before failing ({}) into {}",
             flagged.len(),
             names.join("; "),
@@ -71,11 +71,11 @@ pub fn run(request: &CheckRequest<'_>) -> Result<(), Error> {
         measure_again(request.run_dir, &exp, &flagged, &confirm_csv)?;
         outcome.confirm(&confirm_csv, request.baseline, &request.options).map_err(input)?;
     }
-    println!("{}", outcome.markdown());
+    say!("{}", outcome.markdown());
     let json = request.json.clone().unwrap_or_else(|| request.run_dir.join("check.json"));
     std::fs::write(&json, outcome.to_json())
         .map_err(|e| Error::Run(format!("{}: cannot write: {e}", json.display())))?;
-    println!("check: {}", json.display());
+    say!("check: {}", json.display());
     if outcome.failed() {
         return Err(Error::Run("regression against the baseline (see the table above)".into()));
     }

@@ -105,7 +105,7 @@ pub fn run(request: &CountRequest<'_>) -> Result<(), Error> {
         }
     }
     for (why, configs) in &skipped {
-        eprintln!("not counted ({why}): {}", configs.join(", "));
+        note!("not counted ({why}): {}", configs.join(", "));
     }
     if todo.is_empty() {
         return Err(Error::Input(format!("{}: no single-thread configuration to count", exp.path.display())));
@@ -147,7 +147,7 @@ pub fn run(request: &CountRequest<'_>) -> Result<(), Error> {
                 })
             });
             match &counted {
-                Ok([b, tr]) => eprintln!(
+                Ok([b, tr]) => note!(
                     "counted {} objects {}: build {} trace {} instructions ({:.1} s)",
                     c.series,
                     c.settings.objects,
@@ -155,7 +155,7 @@ pub fn run(request: &CountRequest<'_>) -> Result<(), Error> {
                     tr.instructions,
                     t.elapsed().as_secs_f64()
                 ),
-                Err(e) => eprintln!("FAILED {} objects {}: {e}", c.series, c.settings.objects),
+                Err(e) => note!("FAILED {} objects {}: {e}", c.series, c.settings.objects),
             }
             results.lock().expect("no job panics")[i] = Some(counted);
         }
@@ -171,7 +171,7 @@ pub fn run(request: &CountRequest<'_>) -> Result<(), Error> {
     }
     let path = dir.join(instructions::FILE);
     instructions::write(&path, &counts).map_err(|e| Error::Run(e.to_string()))?;
-    println!(
+    say!(
         "instructions: {} phases of {} configurations counted in {:.0} s with {valgrind}{}: {}",
         counts.len(),
         todo.len(),

@@ -6,7 +6,7 @@ use tracer::accel::{Split, Traversal, WideParams};
 use tracer::executor::StrategyKind;
 
 fn line<T: Named>(what: &str, names: &[T]) {
-    println!("{what:<12} {}", names.iter().map(|n| n.name()).collect::<Vec<_>>().join(", "));
+    say!("{what:<12} {}", names.iter().map(|n| n.name()).collect::<Vec<_>>().join(", "));
 }
 
 /// Prints the lists.
@@ -18,7 +18,7 @@ pub fn run() {
     let names = |peers: &[&PeerKind]| peers.iter().map(|p| p.name()).collect::<Vec<_>>().join(", ");
     let obvhs: Vec<&PeerKind> = PeerKind::ALL.iter().filter(|p| p.is_obvhs()).collect();
     let embree: Vec<&PeerKind> = PeerKind::ALL.iter().filter(|p| p.needs_embree()).collect();
-    println!(
+    say!(
         "{:<12} {}: built in (obvhs 0.4; {}: {})",
         "",
         names(&obvhs),
@@ -26,18 +26,18 @@ pub fn run() {
         ObvhsQuality::names()
     );
     match crate::peers::embree_status() {
-        Ok(info) => println!("{:<12} {}: available (Embree {} from {})", "", names(&embree), info.version, info.path),
-        Err(e) => println!("{:<12} {}: unavailable: {e}", "", names(&embree)),
+        Ok(info) => say!("{:<12} {}: available (Embree {} from {})", "", names(&embree), info.version, info.path),
+        Err(e) => say!("{:<12} {}: unavailable: {e}", "", names(&embree)),
     }
     line("workloads", Workload::ALL);
     line("splits", &Split::ALL);
     line("traversals", &Traversal::ALL);
     line("strategies", &StrategyKind::ALL);
     let ints = |v: &[u32]| v.iter().map(u32::to_string).collect::<Vec<_>>().join(", ");
-    println!("{:<12} {} (wide-bvh {})", "node widths", ints(&WideParams::WIDTHS), Axis::node_width.key());
-    println!("{:<12} {} (wide-bvh {})", "leaf blocks", ints(&WideParams::LEAF_BLOCKS), Axis::leaf_block.key());
+    say!("{:<12} {} (wide-bvh {})", "node widths", ints(&WideParams::WIDTHS), Axis::node_width.key());
+    say!("{:<12} {} (wide-bvh {})", "leaf blocks", ints(&WideParams::LEAF_BLOCKS), Axis::leaf_block.key());
     let here: Vec<&str> = Kernel::available().into_iter().map(Kernel::name).collect();
-    println!(
+    say!(
         "{:<12} {} (wide-bvh {}; this CPU runs: auto = {}, {})",
         "kernels",
         Kernel::ALL.map(Kernel::name).join(", "),
@@ -46,7 +46,7 @@ pub fn run() {
         here.join(", ")
     );
     line("orders", &ChildOrdering::ALL);
-    println!(
+    say!(
         "{:<12} {} (wide-bvh {}; {} {}, default {}; ray sets only)",
         "packets",
         ints(&WideParams::PACKETS),
@@ -55,5 +55,5 @@ pub fn run() {
         PacketSize::embree_allowed(),
         PacketSize::EMBREE_DEFAULT
     );
-    println!("{:<12} {} logical cores on this machine", "threads", crate::render::available_threads());
+    say!("{:<12} {} logical cores on this machine", "threads", crate::render::available_threads());
 }

@@ -1,5 +1,8 @@
 //! `harness`: the bvhlab command line. The data's trip: config → plan → run → rows → report.
 
+/// Progress and the `say!`/`note!` macros every other module prints with (declared first for them).
+#[macro_use]
+mod output;
 mod ab;
 mod baseline;
 mod check;
@@ -9,7 +12,6 @@ mod count;
 mod error;
 mod list;
 mod merge;
-mod output;
 mod peers;
 mod plan;
 mod render;
@@ -49,7 +51,7 @@ fn main() -> ExitCode {
         }),
         Command::History(HistoryCommand::Append { run_dir, dir }) => history_append(&run_dir, &dir),
         Command::History(HistoryCommand::Plot { dir }) => report::history::plot(&dir)
-            .map(|files| files.iter().for_each(|f| println!("{}", f.display())))
+            .map(|files| files.iter().for_each(|f| say!("{}", f.display())))
             .map_err(|e| Error::Input(e.to_string())),
         Command::Ab(args) => ab::run(&ab::AbRequest {
             base: &args.base,
@@ -60,7 +62,7 @@ fn main() -> ExitCode {
             no_confirm: args.no_confirm,
         }),
         Command::Baseline(BaselineCommand::Save { run_dir, name, force }) => baseline::save(&run_dir, &name, force).map(|dest| {
-            println!("baseline saved: {}", dest.display());
+            say!("baseline saved: {}", dest.display());
         }),
         Command::Slurm(SlurmCommand::Submit(args)) => slurm::submit(&args),
         Command::Slurm(SlurmCommand::Resubmit { run_dir, dry_run }) => slurm::resubmit(&run_dir, dry_run),
@@ -74,7 +76,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            note!("error: {e}");
             ExitCode::from(e.exit_code())
         }
     }
@@ -100,9 +102,9 @@ fn write_report_with(dir: &Path, exp: &Experiment, notes: Vec<String>, warnings:
             Verdict::Fails => "FAILS",
             Verdict::Inconclusive => "inconclusive",
         };
-        println!("claim {verdict:<12} ratio {:.3} [{:.3}, {:.3}] vs {:.3}: {}", c.ratio, c.lo, c.hi, c.threshold, c.text);
+        say!("claim {verdict:<12} ratio {:.3} [{:.3}, {:.3}] vs {:.3}: {}", c.ratio, c.lo, c.hi, c.threshold, c.text);
     }
-    println!("report: {}", dir.join("REPORT.md").display());
+    say!("report: {}", dir.join("REPORT.md").display());
     Ok(outcome.claims.iter().any(|c| c.verdict == Verdict::Fails))
 }
 
@@ -141,7 +143,7 @@ fn run_command(args: &RunArgs) -> Result<(), Error> {
     run::sweep(&exp, &plan, &dir, args.resume)?;
     if let Some((i, n)) = shard {
         if plan.runs.is_empty() {
-            println!("shard {i} of {n} is empty (the plan has fewer scene cells than shards): nothing to run");
+            say!("shard {i} of {n} is empty (the plan has fewer scene cells than shards): nothing to run");
             return Ok(());
         }
     }
@@ -167,7 +169,7 @@ fn skip_unavailable(exp: &Experiment, plan: &mut Plan, require_all: bool) -> Res
     skipped.dedup();
     plan.runs.retain(|r| !needs(r.config));
     let note = format!("Embree 4 is unavailable, so these series were skipped: {}. {e}", skipped.join(", "));
-    eprintln!("note: {note}");
+    note!("note: {note}");
     plan.notes.push(note);
     Ok(())
 }
@@ -179,7 +181,7 @@ fn history_append(run_dir: &Path, dir: &Path) -> Result<(), Error> {
     }
     let exp = Experiment::load(&path)?;
     let n = report::history::append(run_dir, &exp.report_spec(vec![]), dir, &Default::default()).map_err(|e| Error::Input(e.to_string()))?;
-    println!("history: {n} speedups of {} appended to {}", run_dir.display(), dir.join("history.csv").display());
+    say!("history: {n} speedups of {} appended to {}", run_dir.display(), dir.join("history.csv").display());
     Ok(())
 }
 
@@ -237,8 +239,8 @@ fn validate_command(args: &ValidateArgs) -> Result<(), Error> {
         let n = plan.configurations.iter().filter(|c| c.series == s.label).count();
         format!("{} ({n})", s.label)
     }).collect();
-    println!("{}: ok", exp.path.display());
-    println!("configurations {} ({})", plan.configurations.len(), series.join(", "));
+    say!("{}: ok", exp.path.display());
+    say!("configurations {} ({})", plan.configurations.len(), series.join(", "));
     let each = match exp.repetitions {
         Repetitions::Fixed(n) => format!("{n} repetitions each"),
         Repetitions::Auto { min, max, target_width } => {
@@ -246,15 +248,15 @@ fn validate_command(args: &ValidateArgs) -> Result<(), Error> {
         }
     };
     let warmups = plan.runs.len() - plan.recorded_runs();
-    println!("runs           at most {} recorded ({each}) + {warmups} warm-ups, order {}", plan.recorded_runs(), format!("{:?}", exp.order).to_lowercase());
+    say!("runs           at most {} recorded ({each}) + {warmups} warm-ups, order {}", plan.recorded_runs(), format!("{:?}", exp.order).to_lowercase());
     let fewest = exp.repetitions.min() as f64 / exp.repetitions.max() as f64;
     if fewest < 1.0 {
-        println!("estimate       ~{:.0} to ~{:.0} s on {cores} cores (rough cost model, within about 2x)", seconds * fewest, seconds);
+        say!("estimate       ~{:.0} to ~{:.0} s on {cores} cores (rough cost model, within about 2x)", seconds * fewest, seconds);
     } else {
-        println!("estimate       ~{:.0} s on {cores} cores (rough cost model, within about 2x)", seconds);
+        say!("estimate       ~{:.0} s on {cores} cores (rough cost model, within about 2x)", seconds);
     }
     for n in &plan.notes {
-        println!("note           {n}");
+        say!("note           {n}");
     }
     Ok(())
 }

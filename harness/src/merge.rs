@@ -295,6 +295,6 @@ pub fn run(run_dir: &Path, allow_mixed_machines: bool) -> Result<(), Error> {
     } else {
         vec![]
     };
-    println!("merged {rows} rows of {n} shards into {}", runs.display());
+    say!("merged {rows} rows of {n} shards into {}", runs.display());
     crate::write_report_with(run_dir, &exp, vec![note], warnings).map(|_| ())
 }

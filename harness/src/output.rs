@@ -6,8 +6,40 @@
 //! mean wall time of its own runs. The runs still expected come from the sweep (with `repetitions = "auto"`
 //! an expectation, see `run::adaptive`).
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::time::{Duration, Instant};
+
+/// Writes to standard output or standard error, as [`say!`] and [`note!`] do. A reader that has gone (a closed
+/// pipe, as in `harness list | head -1`) ends the process quietly with exit 0, as `ls | head` does; any other
+/// write error ends it with exit 1 and one line on standard error. Worker pipes never come here: the worker
+/// protocol writes through its own handle and fails loudly.
+pub fn write_or_exit(to_stderr: bool, text: std::fmt::Arguments<'_>) {
+    let written = if to_stderr {
+        writeln!(std::io::stderr().lock(), "{text}")
+    } else {
+        let mut out = std::io::stdout().lock();
+        out.write_fmt(format_args!("{text}\n")).and_then(|()| out.flush())
+    };
+    match written {
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
+        Err(e) => {
+            let _ = writeln!(std::io::stderr(), "error: cannot write to {}: {e}", if to_stderr { "stderr" } else { "stdout" });
+            std::process::exit(1);
+        }
+    }
+}
+
+/// `println!` that ends the process quietly when standard output's reader has gone ([`write_or_exit`]).
+macro_rules! say {
+    () => { $crate::output::write_or_exit(false, format_args!("")) };
+    ($($arg:tt)*) => { $crate::output::write_or_exit(false, format_args!($($arg)*)) };
+}
+
+/// `eprintln!` that ends the process quietly when standard error's reader has gone ([`write_or_exit`]).
+macro_rules! note {
+    ($($arg:tt)*) => { $crate::output::write_or_exit(true, format_args!($($arg)*)) };
+}
 
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -123,7 +155,7 @@ impl Progress {
                 bar.set_prefix(format!("about {} left", duration(seconds)));
             }
             None if first => {
-                eprintln!("about {:.0} runs, estimated {} (cost model, within about 2x)", count, duration(seconds));
+                note!("about {:.0} runs, estimated {} (cost model, within about 2x)", count, duration(seconds));
                 self.last_line = Some(Instant::now());
             }
             None => {}
@@ -153,7 +185,7 @@ impl Progress {
                 let now = Instant::now();
                 if self.last_line.is_none_or(|t| now - t >= Duration::from_secs(2)) || seconds >= 1.0 {
                     // The estimate printed is the one from before this run (update() follows): close enough.
-                    eprintln!(
+                    note!(
                         "[{}/~{:.0}] {} elapsed, about {} left: {what}",
                         self.done,
                         self.done as f64 + self.runs_left - 1.0,
@@ -171,7 +203,7 @@ impl Progress {
         if let Some(bar) = &self.bar {
             bar.finish_and_clear();
         }
-        eprintln!("{} runs in {}", self.done, duration(self.started.elapsed().as_secs_f64()));
+        note!("{} runs in {}", self.done, duration(self.started.elapsed().as_secs_f64()));
     }
 }
 

@@ -91,20 +91,20 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
     let encode_s = t3.elapsed().as_secs_f64();
 
     let stats = accel.stats();
-    println!("scene        {} spheres, fingerprint {:016x}", scene.spheres.len(), scene.fingerprint());
+    say!("scene        {} spheres, fingerprint {:016x}", scene.spheres.len(), scene.fingerprint());
     match accel.kernel_name() {
-        Some(kernel) => println!("accel        {} {:?} {:?} (kernel {kernel})", args.accel.name(), params.bvh, params.wide),
-        None => println!("accel        {} {:?}", args.accel.name(), params.bvh),
+        Some(kernel) => say!("accel        {} {:?} {:?} (kernel {kernel})", args.accel.name(), params.bvh, params.wide),
+        None => say!("accel        {} {:?}", args.accel.name(), params.bvh),
     }
-    println!("strategy     {strategy}");
-    println!("tree         {} nodes, {} leaves, depth {}, {} bytes, SAH cost {:.2}", stats.nodes, stats.leaves, stats.depth, stats.bytes, stats.sah_cost);
-    println!("time         scene {:.4} s, build {:.4} s, render {:.4} s, encode {:.4} s", scene_s, build_s, render_s, encode_s);
+    say!("strategy     {strategy}");
+    say!("tree         {} nodes, {} leaves, depth {}, {} bytes, SAH cost {:.2}", stats.nodes, stats.leaves, stats.depth, stats.bytes, stats.sah_cost);
+    say!("time         scene {:.4} s, build {:.4} s, render {:.4} s, encode {:.4} s", scene_s, build_s, render_s, encode_s);
     if args.count {
         let (_, c) = accel.visit(Render::<WorkCounters> { scene: &scene, settings, strategy, _counters: Default::default() });
         let (nodes, boxes, prims) = c.per_ray();
-        println!("rays         {} ({:.2} Mrays/s)", c.rays, c.rays as f64 / render_s / 1e6);
-        println!("per ray      {nodes:.2} nodes, {boxes:.2} box tests, {prims:.2} sphere tests");
+        say!("rays         {} ({:.2} Mrays/s)", c.rays, c.rays as f64 / render_s / 1e6);
+        say!("per ray      {nodes:.2} nodes, {boxes:.2} box tests, {prims:.2} sphere tests");
     }
-    println!("image        {}×{} hash {:016x} -> {}", image.width, image.height, image.hash(), args.out.display());
+    say!("image        {}×{} hash {:016x} -> {}", image.width, image.height, image.hash(), args.out.display());
     Ok(())
 }

@@ -76,14 +76,14 @@ pub fn run(a: &Path, b: &Path, ignore_timing: bool) -> Result<(), Error> {
     let (na, nb, lines) = differences(&a, &b, &columns)?;
     let ignored = COLUMNS.len() - columns.len();
     if lines.is_empty() {
-        println!("rows-diff: equal: {na} rows each, {} columns compared ({ignored} ignored), order ignored", columns.len());
+        say!("rows-diff: equal: {na} rows each, {} columns compared ({ignored} ignored), order ignored", columns.len());
         return Ok(());
     }
     for line in lines.iter().take(20) {
-        println!("{line}");
+        say!("{line}");
     }
     if lines.len() > 20 {
-        println!("... and {} more", lines.len() - 20);
+        say!("... and {} more", lines.len() - 20);
     }
     Err(Error::Run(format!(
         "rows-diff: {} and {} differ ({na} vs {nb} rows; {} differences over {} columns)",

@@ -230,7 +230,7 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<
         .filter(|r| r.repetition.is_some() || sampler.count(r.config) == 0)
         .collect();
     if !recorded.is_empty() {
-        eprintln!(
+        note!(
             "resuming {}: {} rows already recorded, at most {} runs to go",
             dir.display(),
             recorded.len(),
@@ -262,7 +262,7 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<
             let v = check(plan, c, &mut bank)?;
             progress.validated(run.config, started.elapsed().as_secs_f64());
             if v.mismatches > 0 {
-                eprintln!(
+                note!(
                     "VALIDATION FAILED: {}: {} of {} rays disagree with {} beyond f64 brute force's tolerance \
                      ({} grazing tolerated); f64 shows the {} answers wrong; this configuration is not timed",
                     describe(c),

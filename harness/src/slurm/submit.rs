@@ -78,10 +78,10 @@ fn launch(options: &JobOptions, tasks: &[usize], previous: Vec<Submission>) -> R
 }
 
 fn print_scripts(options: &JobOptions, tasks: &[usize]) {
-    println!("# ---- {}/{SLURM_DIR}/job.sbatch", options.run_dir.display());
-    print!("{}", sbatch::array_script(options, tasks));
-    println!("# ---- {}/{SLURM_DIR}/merge.sbatch", options.run_dir.display());
-    print!("{}", sbatch::merge_script(options, "<ARRAY_JOB_ID>"));
+    say!("# ---- {}/{SLURM_DIR}/job.sbatch", options.run_dir.display());
+    say!("{}", sbatch::array_script(options, tasks).trim_end_matches('\n'));
+    say!("# ---- {}/{SLURM_DIR}/merge.sbatch", options.run_dir.display());
+    say!("{}", sbatch::merge_script(options, "<ARRAY_JOB_ID>").trim_end_matches('\n'));
 }
 
 /// `harness slurm submit`: plans the config, writes `RUN_DIR/slurm/{job,merge}.sbatch`, submits both and records
@@ -124,7 +124,7 @@ pub fn submit(args: &SubmitArgs) -> Result<(), Error> {
         workdir: std::env::current_dir().map_err(|e| Error::Run(format!("cannot read the current folder: {e}")))?,
     };
     if args.no_exclusive && plan.configurations.iter().any(|c| c.threads == Threads::All) {
-        eprintln!(
+        note!(
             "note: without --exclusive, threads = \"all\" resolves on each node to the CPUs the task may use there, and \
              other jobs share the node: timings may not compare"
         );
@@ -135,9 +135,9 @@ pub fn submit(args: &SubmitArgs) -> Result<(), Error> {
         return Ok(());
     }
     let s = launch(&options, &tasks, Vec::new())?;
-    println!("array job {} ({shards} shards, at most {} at once)", s.array_job_id, options.max_parallel);
-    println!("merge job {} (after the array ends)", s.merge_job_id);
-    println!("jobs: {}", jobs_json.display());
+    say!("array job {} ({shards} shards, at most {} at once)", s.array_job_id, options.max_parallel);
+    say!("merge job {} (after the array ends)", s.merge_job_id);
+    say!("jobs: {}", jobs_json.display());
     Ok(())
 }
 
@@ -177,12 +177,12 @@ pub fn resubmit(run_dir: &Path, dry_run: bool) -> Result<(), Error> {
     for i in 1..=o.shards {
         let missing = merge::missing_rows(&plan, &shard_dir(run_dir, i, o.shards), i, o.shards)?;
         if missing > 0 {
-            println!("shard {i} of {}: {missing} planned rows missing", o.shards);
+            say!("shard {i} of {}: {missing} planned rows missing", o.shards);
             tasks.push(i - 1);
         }
     }
     if tasks.is_empty() {
-        println!("all {} shards are complete: nothing to resubmit (merge with `harness merge {}`)", o.shards, run_dir.display());
+        say!("all {} shards are complete: nothing to resubmit (merge with `harness merge {}`)", o.shards, run_dir.display());
         return Ok(());
     }
     if dry_run {
@@ -190,7 +190,7 @@ pub fn resubmit(run_dir: &Path, dry_run: bool) -> Result<(), Error> {
         return Ok(());
     }
     let s = launch(o, &tasks, jobs.submissions.clone())?;
-    println!("array job {} (shards {})", s.array_job_id, tasks.iter().map(|t| (t + 1).to_string()).collect::<Vec<_>>().join(", "));
-    println!("merge job {} (after the array ends)", s.merge_job_id);
+    say!("array job {} (shards {})", s.array_job_id, tasks.iter().map(|t| (t + 1).to_string()).collect::<Vec<_>>().join(", "));
+    say!("merge job {} (after the array ends)", s.merge_job_id);
     Ok(())
 }
