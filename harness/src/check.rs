@@ -111,7 +111,7 @@ fn measure_again(run_dir: &Path, exp: &Experiment, ids: &[String], confirm_csv: 
     plan.runs.retain(|r| ids.contains(&plan.configurations[r.config].id));
     let scratch = run_dir.join("confirm.tmp");
     let _ = std::fs::remove_dir_all(&scratch);
-    crate::run::sweep(&variant, &plan, &scratch, false)?;
+    crate::run::sweep(&variant, &plan, &scratch, crate::run::Existing::Replace)?;
     std::fs::rename(scratch.join(RUNS_CSV), confirm_csv)
         .map_err(|e| Error::Run(format!("{}: cannot write: {e}", confirm_csv.display())))?;
     let _ = std::fs::remove_dir_all(&scratch);

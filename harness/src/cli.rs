@@ -71,7 +71,11 @@ pub struct RunArgs {
     /// Continue a killed sweep: skip runs already recorded in the output folder.
     #[arg(long)]
     pub resume: bool,
-    /// Run only shard I of N (1-based), e.g. 2/4, to spread a sweep over machines (whole scene cells per shard);
+    /// Replace the rows already recorded in the output folder (by default they move aside into previous/).
+    #[arg(long)]
+    pub force: bool,
+    /// Run only shard I of N (1-based), e.g. 2/4, into OUT/shard-I-of-N/, to spread a sweep over machines (whole
+    /// scene cells per shard);
     /// `env` reads it from SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT, `env/N` from SLURM_ARRAY_TASK_ID or
     /// JOB_COMPLETION_INDEX (a Kubernetes indexed Job) with N shards.
     #[arg(long, value_parser = parse_shard)]

@@ -125,10 +125,14 @@ fn run_command(args: &RunArgs) -> Result<(), Error> {
     let mut dir = args.out.clone().unwrap_or_else(|| run::default_dir(&exp, args.quick));
     if let Some((i, n)) = shard {
         plan.keep_shard(i, n);
-        if args.out.is_none() {
-            dir = slurm::shard_dir(&dir, i, n);
-        }
+        dir = slurm::shard_dir(&dir, i, n);
     }
+    let existing = match (args.resume, args.force) {
+        (true, true) => return Err(Error::Input("--resume and --force: choose one (allowed: either, or neither)".into())),
+        (true, false) => run::Existing::Resume,
+        (false, true) => run::Existing::Replace,
+        (false, false) => run::Existing::MoveAside,
+    };
     let before: std::collections::BTreeSet<usize> = plan.runs.iter().map(|r| r.config).collect();
     skip_unavailable(&exp, &mut plan, args.require_all)?;
     if let Some((i, n)) = shard {
@@ -140,7 +144,7 @@ fn run_command(args: &RunArgs) -> Result<(), Error> {
         std::fs::create_dir_all(&dir).map_err(|e| Error::Input(format!("{}: cannot create: {e}", dir.display())))?;
         slurm::write_json(&dir.join(slurm::SHARD_JSON), &info)?;
     }
-    run::sweep(&exp, &plan, &dir, args.resume)?;
+    run::sweep(&exp, &plan, &dir, existing)?;
     if let Some((i, n)) = shard {
         if plan.runs.is_empty() {
             say!("shard {i} of {n} is empty (the plan has fewer scene cells than shards): nothing to run");

@@ -267,6 +267,11 @@ pub fn run(run_dir: &Path, allow_mixed_machines: bool) -> Result<(), Error> {
 
     let io = |p: &Path, e: std::io::Error| Error::Run(format!("{}: cannot write: {e}", p.display()));
     let runs = run_dir.join(RUNS_CSV);
+    if runs.exists() {
+        // An earlier merge (or a run into this folder) keeps its rows: they move aside, as before a run.
+        let to = crate::run::move_aside(run_dir)?;
+        note!("{}: the earlier rows moved to {}", run_dir.display(), to.display());
+    }
     let mut log = RowLog::create(&runs).map_err(|e| io(&runs, e))?;
     let rows: usize = shards.iter().map(|s| s.rows.len()).sum();
     for r in shards.iter().flat_map(|s| &s.rows) {

@@ -307,6 +307,49 @@ fn a_killed_sweep_resumes_without_losing_or_duplicating_rows() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
 }
 
+/// Runs into a folder that holds rows never lose them: each earlier run moves into `previous/` (older ones into
+/// `previous-1`, …), `check` compares against it out of the box, `--force` replaces, `--resume --force` is refused.
+#[test]
+fn runs_into_one_folder_keep_every_earlier_run() {
+    let dir = temp("keep");
+    let cfg = dir.join("keep.toml");
+    std::fs::write(&cfg, "name = \"keep\"\nrepetitions = 2\n[sweep]\nobjects = [10, 20]\nwidth = 32\nheight = 16\n").unwrap();
+    let out = dir.join("out");
+    let run = || harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    let timestamps = |runs: &Path| column(runs, "timestamp");
+    let o = run();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let first = timestamps(&out.join("runs.csv"));
+    assert_eq!(first.len(), 4);
+    let o = run();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("moved to"), "says where the earlier rows went: {}", stderr(&o));
+    assert_eq!(timestamps(&out.join("previous/runs.csv")), first, "the first run's rows kept whole");
+    assert!(out.join("previous/REPORT.md").is_file() && out.join("previous/experiment.toml").is_file());
+    let second = timestamps(&out.join("runs.csv"));
+    assert_eq!(second.len(), 4);
+    let o = run();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(timestamps(&out.join("previous-1/runs.csv")), first, "the oldest run moved on to previous-1");
+    assert_eq!(timestamps(&out.join("previous/runs.csv")), second);
+    assert!(!out.join("previous/previous").exists(), "earlier runs are not nested");
+
+    let o = harness()
+        .args(["check", out.to_str().unwrap(), "--baseline", out.join("previous").to_str().unwrap(), "--timings-for-information"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "check against previous/: {}{}", String::from_utf8_lossy(&o.stdout), stderr(&o));
+
+    let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--force"]).output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!out.join("previous-2").exists(), "--force replaces without moving aside");
+    let before = std::fs::read_to_string(out.join("runs.csv")).unwrap();
+    let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--resume", "--force"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert_eq!(stderr(&o).lines().count(), 1, "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(out.join("runs.csv")).unwrap(), before, "nothing written");
+}
+
 /// The cells of `column` in a runs.csv, row by row (for columns without commas in their values).
 fn column(runs: &Path, column: &str) -> Vec<String> {
     let text = std::fs::read_to_string(runs).unwrap();

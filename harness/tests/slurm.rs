@@ -30,12 +30,12 @@ fn tiny(dir: &Path) -> PathBuf {
     path
 }
 
-/// Runs `harness run CONFIG --shard I/N --out RUN/shard-I-of-N` for every shard.
+/// Runs `harness run CONFIG --shard I/N --out RUN` (into `RUN/shard-I-of-N/`) for every shard.
 fn run_shards(config: &Path, run: &Path, n: usize) {
     for i in 1..=n {
-        let out = run.join(format!("shard-{i}-of-{n}"));
-        let o = harness().arg("run").arg(config).args(["--shard", &format!("{i}/{n}"), "--out"]).arg(&out).output().unwrap();
+        let o = harness().arg("run").arg(config).args(["--shard", &format!("{i}/{n}"), "--out"]).arg(run).output().unwrap();
         assert!(o.status.success(), "shard {i}: {}", stderr(&o));
+        assert!(run.join(format!("shard-{i}-of-{n}/runs.csv")).is_file(), "shard {i} ran into its shard folder");
     }
 }
 
@@ -93,7 +93,7 @@ fn shard_env_without_the_variables_is_one_line_exit_2_and_writes_nothing() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
-    let text = std::fs::read_to_string(out.join("runs.csv")).unwrap();
+    let text = std::fs::read_to_string(out.join("shard-2-of-2/runs.csv")).unwrap();
     let rows = schema::row::read_rows(&text).unwrap();
     assert!(!rows.is_empty() && rows.iter().all(|r| r.shard == "2/2"), "{text}");
     let _ = std::fs::remove_dir_all(&dir);
@@ -182,7 +182,7 @@ fn submit_and_resubmit_against_a_fake_sbatch() {
     assert!(stderr(&o).contains("already submitted"), "{}", stderr(&o));
 
     // Shard 1 ran to the end, shard 2 never started: only task 1 (shard 2) is submitted again.
-    let o = harness().arg("run").arg(&config).args(["--shard", "1/2", "--out"]).arg(run.join("shard-1-of-2")).output().unwrap();
+    let o = harness().arg("run").arg(&config).args(["--shard", "1/2", "--out"]).arg(&run).output().unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     let o = harness().args(["slurm", "resubmit"]).arg(&run).env("PATH", &path).output().unwrap();
     assert!(o.status.success(), "{}", stderr(&o));

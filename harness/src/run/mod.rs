@@ -38,22 +38,80 @@ pub fn default_dir(exp: &Experiment, quick: bool) -> std::path::PathBuf {
     std::path::PathBuf::from("results").join(if quick { format!("{}-quick", exp.name) } else { exp.name.clone() })
 }
 
-/// Opens the row log in `dir`: continues it with `resume` (if it exists and was made by the same config
-/// text), else starts it over. Returns the rows already recorded.
-fn open_log(exp: &Experiment, dir: &Path, resume: bool) -> Result<(RowLog, Vec<Row>), Error> {
+/// What a run does with a folder that already holds recorded rows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Existing {
+    /// Move the earlier run aside into `previous/` (the default: no recorded row is lost).
+    MoveAside,
+    /// Continue it (`--resume`): skip the runs already recorded.
+    Resume,
+    /// Replace it (`--force`): its rows are deleted.
+    Replace,
+}
+
+/// The folder an earlier run moves into when a new run starts in its folder; older ones become `previous-1`,
+/// `previous-2`, … in the order they were recorded.
+pub const PREVIOUS: &str = "previous";
+
+/// True for the entries of a run folder that belong to other runs and stay where they are when the folder's own
+/// run moves aside: earlier runs, shard folders (each moves its own run aside) and Slurm job files.
+fn belongs_to_other_runs(name: &str) -> bool {
+    name == PREVIOUS
+        || name.strip_prefix("previous-").is_some_and(|n| n.parse::<u32>().is_ok())
+        || (name.starts_with("shard-") && name.contains("-of-"))
+        || name == crate::slurm::SLURM_DIR
+}
+
+/// Moves the run recorded in `dir` (its rows, config copy, summaries, figures, report and counts) into
+/// `dir/previous/`, after renaming an existing `previous/` to the next free `previous-K`. Returns the folder the
+/// rows moved to.
+pub fn move_aside(dir: &Path) -> Result<std::path::PathBuf, Error> {
+    let io = |what: &str, p: &Path, e: std::io::Error| Error::Run(format!("{}: cannot {what}: {e}", p.display()));
+    let previous = dir.join(PREVIOUS);
+    if previous.exists() {
+        let older = (1..).map(|k| dir.join(format!("{PREVIOUS}-{k}"))).find(|p| !p.exists()).expect("a free name");
+        std::fs::rename(&previous, &older).map_err(|e| io("move aside", &previous, e))?;
+    }
+    std::fs::create_dir(&previous).map_err(|e| io("create", &previous, e))?;
+    let entries = std::fs::read_dir(dir).map_err(|e| io("read", dir, e))?;
+    for entry in entries {
+        let entry = entry.map_err(|e| io("read", dir, e))?;
+        if belongs_to_other_runs(&entry.file_name().to_string_lossy()) {
+            continue;
+        }
+        let to = previous.join(entry.file_name());
+        std::fs::rename(entry.path(), &to).map_err(|e| io("move aside", &entry.path(), e))?;
+    }
+    Ok(previous)
+}
+
+/// Opens the row log in `dir`. A folder holding rows is continued ([`Existing::Resume`], when made by the same
+/// config text), replaced ([`Existing::Replace`]) or, by default, moved aside first ([`move_aside`]). Returns the
+/// rows already recorded (those of a continued log).
+fn open_log(exp: &Experiment, dir: &Path, existing: Existing) -> Result<(RowLog, Vec<Row>), Error> {
     let runs = dir.join(RUNS_CSV);
     let copy = dir.join(CONFIG_COPY);
     let io = |what: &str, p: &Path, e: std::io::Error| Error::Input(format!("{}: cannot {what}: {e}", p.display()));
-    if resume && runs.exists() {
-        let recorded = std::fs::read_to_string(&copy).map_err(|e| io("read", &copy, e))?;
-        if recorded != exp.text {
-            return Err(Error::Input(format!(
-                "{}: was recorded with a different config than {}; run without --resume to start over",
-                dir.display(),
-                exp.path.display()
-            )));
+    if runs.exists() {
+        match existing {
+            Existing::Resume => {
+                let recorded = std::fs::read_to_string(&copy).map_err(|e| io("read", &copy, e))?;
+                if recorded != exp.text {
+                    return Err(Error::Input(format!(
+                        "{}: was recorded with a different config than {}; run without --resume to move it aside \
+                         into {PREVIOUS}/ and start over",
+                        dir.display(),
+                        exp.path.display()
+                    )));
+                }
+                return RowLog::resume(&runs).map_err(|e| io("resume", &runs, e));
+            }
+            Existing::MoveAside => {
+                let to = move_aside(dir)?;
+                note!("{}: the earlier run's rows moved to {} (--force replaces them instead)", dir.display(), to.display());
+            }
+            Existing::Replace => {}
         }
-        return RowLog::resume(&runs).map_err(|e| io("resume", &runs, e));
     }
     std::fs::create_dir_all(dir).map_err(|e| io("create", dir, e))?;
     std::fs::write(&copy, &exp.text).map_err(|e| io("write", &copy, e))?;
@@ -199,9 +257,9 @@ fn row(
 /// validated (and counted) once before its first timed run; one that disagrees with the reference is
 /// recorded once with `validation = FAILED` and no timings, and never timed. With `repetitions = "auto"` a
 /// configuration's remaining repetitions are skipped once its median is known well enough ([`adaptive`]).
-pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, resume: bool) -> Result<(), Error> {
+pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, existing: Existing) -> Result<(), Error> {
     let provenance = Provenance::collect();
-    let (mut log, recorded) = open_log(exp, dir, resume)?;
+    let (mut log, recorded) = open_log(exp, dir, existing)?;
     let metric_of = |c: &Configuration| {
         report::spec::speedup_metric(exp.speedup_metric.as_deref(), schema::Named::name(c.settings.workload))
     };

@@ -93,10 +93,9 @@ pub fn array_script(o: &JobOptions, tasks: &[usize]) -> String {
     common(&mut s, o);
     let _ = writeln!(s, "#SBATCH --output={}", path(&log_dir(o).join("shard-task-%a-job-%A.log")));
     s.push_str("set -euo pipefail\n");
-    s.push_str("shard=$((SLURM_ARRAY_TASK_ID + 1))\n");
     let _ = writeln!(
         s,
-        "exec {} run {}{} --shard env/{n} --config-hash {} --resume --out {}\"/shard-${{shard}}-of-{n}\"",
+        "exec {} run {}{} --shard env/{n} --config-hash {} --resume --out {}",
         path(&o.harness),
         path(&o.config),
         if o.quick { " --quick" } else { "" },
@@ -161,9 +160,8 @@ mod tests {
             "#SBATCH --constraint='avx2&zen3'",
             "#SBATCH --chdir=/repo",
             "#SBATCH --output='/repo/results/my run/slurm/logs/shard-task-%a-job-%A.log'",
-            "shard=$((SLURM_ARRAY_TASK_ID + 1))",
             "exec /repo/target/release/harness run /repo/experiments/ci.toml --quick --shard env/4 --config-hash \
-             0123456789abcdef --resume --out '/repo/results/my run'\"/shard-${shard}-of-4\"",
+             0123456789abcdef --resume --out '/repo/results/my run'",
         ] {
             assert!(lines.contains(&want), "missing {want:?} in\n{text}");
         }
