@@ -37,13 +37,15 @@ pub fn run() {
     say!("{:<12} {} (wide-bvh {})", "node widths", ints(&WideParams::WIDTHS), Axis::node_width.key());
     say!("{:<12} {} (wide-bvh {})", "leaf blocks", ints(&WideParams::LEAF_BLOCKS), Axis::leaf_block.key());
     let here: Vec<&str> = Kernel::available().into_iter().map(Kernel::name).collect();
+    let auto: Vec<String> =
+        WideParams::LEAF_BLOCKS.iter().map(|&b| format!("{} for blocks of {b}", Kernel::Auto.resolve_for(b).name())).collect();
     say!(
-        "{:<12} {} (wide-bvh {}; this CPU runs: auto = {}, {})",
+        "{:<12} {} (wide-bvh {}; this CPU runs: {}; auto = {})",
         "kernels",
         Kernel::ALL.map(Kernel::name).join(", "),
         Axis::simd_kernel.key(),
-        Kernel::Auto.resolve().name(),
-        here.join(", ")
+        here.join(", "),
+        auto.join(", ")
     );
     line("orders", &ChildOrdering::ALL);
     say!(

@@ -112,6 +112,7 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
         distinct(runs, "harness_version")
     );
     validation_line(md, runs);
+    overhead_line(md, runs);
     let _ =
         writeln!(md, "- Time: {} to {}", stamps.first().copied().unwrap_or("?"), stamps.last().copied().unwrap_or("?"));
     md.push_str(
@@ -126,6 +127,35 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
              their times measure oversubscription.\n"
         );
     }
+}
+
+/// Nanoseconds per ray of a run's `metric` (a time in seconds over its rays); NaN without rays.
+fn ns_per_ray(run: &Run, metric: &str) -> f64 {
+    let rays = run.num("rays");
+    if rays > 0.0 { run.num(metric) / rays * 1e9 } else { f64::NAN }
+}
+
+/// True when the runs recorded the harness's own cost (`overhead_s`: ray sets recorded since it existed).
+fn has_overhead(runs: &[Run]) -> bool {
+    runs.iter().any(|r| r.num("overhead_s").is_finite())
+}
+
+/// The harness's own cost per ray, as the `null` backend measured it after every timed ray-set trace.
+fn overhead_line(md: &mut String, runs: &[Run]) {
+    if !has_overhead(runs) {
+        return;
+    }
+    let per_ray: Vec<f64> = runs.iter().map(|r| ns_per_ray(r, "overhead_s")).filter(|v| v.is_finite()).collect();
+    let (lo, hi) = per_ray.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    let _ = writeln!(
+        md,
+        "- Harness overhead: the `null` backend (every ray misses, nothing read) traced the same rays under the same \
+         strategy after every timed trace in {} to {} ns per ray (median {}); every trace time includes it (the \
+         summary's `harness ns/ray` beside each `median trace ns/ray`)",
+        num(lo),
+        num(hi),
+        num(stats::median(&per_ray))
+    );
 }
 
 /// How many repetitions the configurations got under `repetitions = "auto"`: how many stopped because their
@@ -296,6 +326,10 @@ fn summary_table(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     let mut header = vec!["series".to_string()];
     header.extend(varying.iter().map(|c| c.to_string()));
     header.extend(["seeds", "n", "median total_s [95% CI]", "median Mrays/s"].map(String::from));
+    let overhead = has_overhead(runs);
+    if overhead {
+        header.extend(["median trace ns/ray", "harness ns/ray"].map(String::from));
+    }
     if let Some(reference) = &spec.reference {
         let metrics: BTreeSet<&str> = runs.iter().map(|r| spec.speedup_metric_of(r.text("workload"))).collect();
         let metrics = metrics.into_iter().collect::<Vec<_>>().join(" or ");
@@ -314,6 +348,14 @@ fn summary_table(md: &mut String, rows: &Rows, spec: &ReportSpec) {
         let total = stats::median_ci(&pool::samples(group.iter().copied(), "total_s"), stats::seed_for(&key));
         cells.push(format!("{} [{}, {}]", num(total.value), num(total.lo), num(total.hi)));
         cells.push(num(stats::median(&pool::samples(group.iter().copied(), "mrays_per_s"))));
+        if overhead {
+            let median_of = |metric: &str| {
+                let values: Vec<f64> = group.iter().map(|r| ns_per_ray(r, metric)).filter(|v| v.is_finite()).collect();
+                if values.is_empty() { "—".to_string() } else { num(stats::median(&values)) }
+            };
+            cells.push(median_of("trace_s"));
+            cells.push(median_of("overhead_s"));
+        }
         if let Some(reference) = &spec.reference {
             let key = format!("{}|pooled speedup", first.config_id());
             let metric = spec.speedup_metric_of(first.text("workload"));

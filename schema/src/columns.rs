@@ -93,6 +93,11 @@ declare_columns! {
         build_s: Option<f64>, Metric, unit "s", decimals 9;
         /// Wall time of tracing (rendering without encoding, or the ray set); empty where validation failed (never timed).
         trace_s: Option<f64>, Metric, unit "s", decimals 9;
+        /// The harness's own cost of the trace: wall time of the `null` backend (every ray misses, nothing read)
+        /// tracing the same rays under the same strategy in the same process, right after the timed trace; the
+        /// trace_s of every backend includes this much. Empty for renders, where validation failed, and in rows
+        /// recorded before this column.
+        overhead_s: Option<f64>, Metric, unit "s", decimals 9, added 5;
         /// Wall time of PNG encoding (0 for ray sets); empty where validation failed (never timed).
         encode_s: Option<f64>, Metric, unit "s", decimals 9;
         /// scene_s + build_s + trace_s + encode_s (not setup_s); empty where validation failed (never timed).

@@ -92,18 +92,25 @@ fn settings(values: &[AxisValue], file: Option<&SphereFile>) -> Settings {
     s
 }
 
-/// Refuses a SIMD kernel this CPU cannot run (before anything is written), naming the ones it can.
-fn check_kernels(file: &str, configurations: &[Configuration]) -> Result<(), Error> {
-    let Some(kernel) = configurations.iter().filter_map(|c| c.settings.simd_kernel).find(|k| !k.is_available()) else {
-        return Ok(());
-    };
-    let allowed = std::iter::once(Kernel::Auto).chain(Kernel::available()).map(Kernel::name).collect::<Vec<_>>();
-    Err(Error::Input(format!(
-        "{file}: {}: {:?} is not available on this CPU (allowed here: {})",
-        Axis::simd_kernel.key(),
-        kernel.name(),
-        allowed.join(", ")
-    )))
+/// Drops the configurations whose SIMD kernel this CPU cannot run (an `avx512` series on an AVX2 machine), so that
+/// one config runs on every machine kind; returns the note that says which series were skipped and what the CPU
+/// has, or `None` when every kernel runs here.
+fn skip_unavailable_kernels(configurations: &mut Vec<Configuration>) -> Option<String> {
+    let missing: Vec<(String, Kernel)> = configurations
+        .iter()
+        .filter_map(|c| c.settings.simd_kernel.filter(|k| !k.is_available()).map(|k| (c.series.clone(), k)))
+        .collect();
+    if missing.is_empty() {
+        return None;
+    }
+    configurations.retain(|c| c.settings.simd_kernel.is_none_or(Kernel::is_available));
+    let mut series: Vec<String> = missing.iter().map(|(s, k)| format!("{s} ({})", k.name())).collect();
+    series.dedup();
+    let here = Kernel::available().into_iter().map(Kernel::name).collect::<Vec<_>>().join(", ");
+    Some(format!(
+        "This CPU lacks the SIMD kernels of these series, so they were skipped: {} (it runs: {here}).",
+        series.join(", ")
+    ))
 }
 
 /// Refuses a packet size `embree-packets` cannot trace (before anything is written): it takes 8 (`rtcIntersect8`)
@@ -197,8 +204,13 @@ impl Plan {
         if configurations.is_empty() {
             return Err(Error::Input(format!("{file}: exclude: every run is excluded (nothing to run)")));
         }
-        check_kernels(&file, &configurations)?;
         let mut notes = Vec::new();
+        if let Some(note) = skip_unavailable_kernels(&mut configurations) {
+            if configurations.is_empty() {
+                return Err(Error::Input(format!("{file}: {}: {note} Nothing is left to run.", Axis::simd_kernel.key())));
+            }
+            notes.push(note);
+        }
         if !above_cores.is_empty() {
             above_cores.sort_unstable();
             above_cores.dedup();

@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use schema::{Settings, Workload};
 use serde::{Deserialize, Serialize};
-use tracer::accel::{AccelVisitor, Accelerator, TreeStats};
+use tracer::accel::{AccelVisitor, Accelerator, Null, TreeStats};
 use tracer::counters::{Counters, NoCounters, WorkCounters};
 use tracer::rays::{RayAnswers, RaySet, trace};
 use tracer::render::{RenderSettings, render};
@@ -24,6 +24,10 @@ pub struct Timing {
     pub scene_s: f64,
     pub build_s: f64,
     pub trace_s: f64,
+    /// The `null` backend's trace of the same ray set right after (the harness's own cost); `None` for renders
+    /// and in answers of workers older than it.
+    #[serde(default)]
+    pub overhead_s: Option<f64>,
     pub encode_s: f64,
     /// Image hash (render) or ray-set answer hash.
     pub output_hash: u64,
@@ -49,6 +53,7 @@ impl Timing {
             scene_s: nan,
             build_s: nan,
             trace_s: nan,
+            overhead_s: None,
             encode_s: nan,
             output_hash,
             scene_fingerprint: 0,
@@ -74,17 +79,40 @@ pub fn make_scene(s: &Settings, file: Option<&Scene>) -> Scene {
     Scene { camera: scene.camera.with_resolution(s.width, s.height), ..scene }
 }
 
-/// Runs the workload with counters `C`: the output hash, the counters and (for ray sets) the answers.
+/// What a workload produced: the rendered image or the ray set's answers. Hashed only after the trace phase's
+/// clock has stopped (hashing every answer is not the backend's work: it cost ~8 ns per ray, more than the whole
+/// rest of the harness's path).
+enum Output {
+    Image(tracer::render::Image),
+    Answers(RayAnswers),
+}
+
+impl Output {
+    /// The image hash or the ray-set answer hash.
+    fn hash(&self) -> u64 {
+        match self {
+            Output::Image(image) => image.hash(),
+            Output::Answers(answers) => answers.hash(),
+        }
+    }
+}
+
+/// Runs the workload with counters `C`: its output and the counters.
 struct Work<'a, C> {
     scene: &'a Scene,
     settings: &'a Settings,
     rays: Option<&'a RaySet>,
-    encode_s: Option<&'a mut f64>,
     _c: std::marker::PhantomData<C>,
 }
 
+impl<'a, C> Work<'a, C> {
+    fn new(scene: &'a Scene, settings: &'a Settings, rays: Option<&'a RaySet>) -> Self {
+        Self { scene, settings, rays, _c: std::marker::PhantomData }
+    }
+}
+
 impl<C: Counters> AccelVisitor for Work<'_, C> {
-    type Output = (u64, C, Option<RayAnswers>);
+    type Output = (Output, C);
     fn visit<A: Accelerator>(self, accel: &A) -> Self::Output {
         let s = self.settings;
         match s.workload {
@@ -92,22 +120,24 @@ impl<C: Counters> AccelVisitor for Work<'_, C> {
                 let (image, c) = bvhlab_phase_trace(|| {
                     render::<_, C>(self.scene, accel, &RenderSettings { max_depth: s.max_depth }, &s.strategy())
                 });
-                if let Some(encode_s) = self.encode_s {
-                    let t = Instant::now();
-                    let mut png = Vec::new();
-                    image.write_png(&mut png).expect("encoding into memory cannot fail");
-                    std::hint::black_box(&png);
-                    *encode_s = t.elapsed().as_secs_f64();
-                }
-                (image.hash(), c, None)
+                (Output::Image(image), c)
             }
             Workload::Rays(_) => {
                 let set = self.rays.expect("ray-set workloads come with their rays");
                 let (answers, c) = bvhlab_phase_trace(|| trace::<_, C>(accel, set, &s.strategy()));
-                (answers.hash(), c, Some(answers))
+                (Output::Answers(answers), c)
             }
         }
     }
+}
+
+/// Seconds to PNG-encode `image` into memory (the render workload's encode phase).
+fn encode_seconds(image: &tracer::render::Image) -> f64 {
+    let t = Instant::now();
+    let mut png = Vec::new();
+    image.write_png(&mut png).expect("encoding into memory cannot fail");
+    std::hint::black_box(&png);
+    t.elapsed().as_secs_f64()
 }
 
 /// The build phase of a timed run, a function of its own that `harness instructions` counts under callgrind
@@ -140,16 +170,25 @@ pub fn timed(settings: &Settings, file: Option<&Scene>, rays: Option<&RaySet>, s
         setup.install(|| bvhlab_phase_build(|| Backend::build(settings, &scene.spheres, setup)))?
     };
     let build_s = t.elapsed().as_secs_f64();
-    let mut encode_s = 0.0;
     let t = Instant::now();
-    let work = Work::<NoCounters> { scene: &scene, settings, rays, encode_s: Some(&mut encode_s), _c: Default::default() };
-    let (output_hash, _, _) = setup.install(|| backend.visit(work));
-    let trace_s = t.elapsed().as_secs_f64() - encode_s;
+    let (output, _) = setup.install(|| backend.visit(Work::<NoCounters>::new(&scene, settings, rays)));
+    let trace_s = t.elapsed().as_secs_f64();
+    let encode_s = match &output {
+        Output::Image(image) => encode_seconds(image),
+        Output::Answers(_) => 0.0,
+    };
+    let output_hash = output.hash();
+    let overhead_s = rays.filter(|_| matches!(output, Output::Answers(_))).map(|set| {
+        let t = Instant::now();
+        std::hint::black_box(setup.install(|| trace::<_, NoCounters>(&Null, set, &settings.strategy())));
+        t.elapsed().as_secs_f64()
+    });
     Ok(Timing {
         setup_s: setup.setup_s,
         scene_s,
         build_s,
         trace_s,
+        overhead_s,
         encode_s,
         output_hash,
         scene_fingerprint: scene.fingerprint(),
@@ -170,10 +209,10 @@ pub fn counted(
     let scene = make_scene(settings, file);
     let setup = Setup::start(settings)?;
     let backend = Backend::build(settings, &scene.spheres, &setup)?;
-    let work = Work::<WorkCounters> { scene: &scene, settings, rays, encode_s: None, _c: Default::default() };
-    let (hash, c, answers) = setup.install(|| backend.visit(work));
-    let answers = match (answers, rays) {
-        (Some(a), Some(r)) if std::ptr::eq(r, answer_rays) => a,
+    let (output, c) = setup.install(|| backend.visit(Work::<WorkCounters>::new(&scene, settings, rays)));
+    let hash = output.hash();
+    let answers = match (output, rays) {
+        (Output::Answers(a), Some(r)) if std::ptr::eq(r, answer_rays) => a,
         _ => {
             struct Answers<'a>(&'a RaySet, &'a Settings);
             impl AccelVisitor for Answers<'_> {
@@ -199,6 +238,7 @@ mod tests {
             scene_s: 0.125,
             build_s: 1e-5,
             trace_s: 3.25,
+            overhead_s: Some(0.002),
             encode_s: 0.0,
             output_hash: 0xdead_beef_0123_4567,
             scene_fingerprint: 42,

@@ -196,6 +196,7 @@ fn row(
     row.scene_s = metric(t.scene_s);
     row.build_s = metric(t.build_s);
     row.trace_s = metric(t.trace_s);
+    row.overhead_s = t.overhead_s.and_then(metric);
     row.encode_s = metric(t.encode_s);
     row.total_s = metric(t.total_s());
     row.rays = w.rays;
@@ -229,7 +230,7 @@ fn row(
     row.peer_info = t.peer_info.clone();
     // A configuration never timed (failed validation) records the kernel it was validated with.
     row.simd_kernel_used = match (t.simd_kernel.as_str(), c.settings.simd_kernel) {
-        ("-", Some(k)) => k.resolve().name().to_string(),
+        ("-", Some(k)) => k.resolve_for(c.settings.accel_params().wide.leaf_block).name().to_string(),
         (used, _) => used.to_string(),
     };
     let m = &p.machine;

@@ -6,6 +6,7 @@
 
 pub mod bvh;
 mod list;
+mod null;
 pub mod wide;
 
 use serde::{Deserialize, Serialize};
@@ -15,6 +16,7 @@ use crate::geometry::{Ray, Sphere};
 
 pub use bvh::{Bvh, BvhParams, FlatBvh, Split, Traversal, TreeStats};
 pub use list::List;
+pub use null::Null;
 pub use wide::{WideBvh, WideParams};
 
 /// The closest intersection found: distance along the ray and the sphere's index in the scene.

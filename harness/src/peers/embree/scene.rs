@@ -128,6 +128,12 @@ impl EmbreeSpheres {
         result
     }
 
+    /// The committed scene's handle and the library's functions, for code that calls Embree directly (the plain
+    /// loop of `examples/embree_loop.rs`). The handle lives as long as `self`.
+    pub fn raw(&self) -> (RTCScene, &super::library::Api) {
+        (self.scene, &self.device.lib.api)
+    }
+
     /// What the device that built this scene reports (version, configuration, native packet width).
     pub fn device_info(&self) -> &DeviceInfo {
         &self.device.info

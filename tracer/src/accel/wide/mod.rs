@@ -83,7 +83,7 @@ impl WideBvh {
             Layout::W8B8(t) => stats(t),
             Layout::W8B16(t) => stats(t),
         };
-        Ok(Self { layout, bvh: *bvh, params: *wide, kernel: wide.kernel.resolve(), stats })
+        Ok(Self { layout, bvh: *bvh, params: *wide, kernel: wide.kernel.resolve_for(wide.leaf_block), stats })
     }
 
     /// [`WideBvh::try_build`] for parameters known to be valid; panics with the reason otherwise.
@@ -95,7 +95,7 @@ impl WideBvh {
     pub fn with_kernel(mut self, kernel: Kernel) -> Result<Self, ParamError> {
         WideParams { kernel, ..self.params }.validate()?;
         self.params.kernel = kernel;
-        self.kernel = kernel.resolve();
+        self.kernel = kernel.resolve_for(self.params.leaf_block);
         Ok(self)
     }
 

@@ -8,7 +8,8 @@ use crate::accel::bvh::ParamError;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Kernel {
-    /// The best this CPU has, resolved when the tree is built (AVX-512, else AVX2, else scalar).
+    /// The kernel measured fastest on this CPU for the tree's leaf block, resolved when the tree is built (see
+    /// [`Kernel::resolve_for`]).
     Auto,
     /// Portable code, one lane at a time (the compiler may still vectorize it with the baseline ISA).
     Scalar,
@@ -50,10 +51,20 @@ impl Kernel {
         [Kernel::Scalar, Kernel::Avx2, Kernel::Avx512].into_iter().filter(|k| k.is_available()).collect()
     }
 
-    /// The kernel that runs: `auto` becomes the widest available one; others are themselves.
-    pub fn resolve(self) -> Kernel {
+    /// The smallest leaf block `auto` runs the AVX-512 kernel for: its 16-lane sphere test needs blocks of 16.
+    /// With blocks of 4 or 8 it runs the AVX2 code compiled with AVX-512F enabled, measured 0-10% slower than
+    /// the AVX2 kernel on single rays (AMD Zen 4 here, Zen 5 in issue #20); with blocks of 16, 5-15% faster
+    /// (`experiments/kernels.toml`, README "SIMD kernels").
+    pub const AVX512_FROM_BLOCK: u32 = 16;
+
+    /// The kernel that runs for leaf blocks of `leaf_block` spheres: `auto` becomes AVX-512 for blocks of at least
+    /// [`Kernel::AVX512_FROM_BLOCK`] where the CPU has it, else AVX2 where it has that, else scalar (the fastest
+    /// measured); a named kernel is itself.
+    pub fn resolve_for(self, leaf_block: u32) -> Kernel {
         match self {
-            Kernel::Auto => *Kernel::available().last().expect("scalar is always available"),
+            Kernel::Auto if leaf_block >= Self::AVX512_FROM_BLOCK && Kernel::Avx512.is_available() => Kernel::Avx512,
+            Kernel::Auto if Kernel::Avx2.is_available() => Kernel::Avx2,
+            Kernel::Auto => Kernel::Scalar,
             k => k,
         }
     }
@@ -166,11 +177,17 @@ mod tests {
     }
 
     #[test]
-    fn auto_resolves_to_an_available_kernel() {
-        let k = Kernel::Auto.resolve();
-        assert_ne!(k, Kernel::Auto);
-        assert!(k.is_available());
-        assert_eq!(Kernel::Scalar.resolve(), Kernel::Scalar);
+    fn auto_resolves_to_the_kernel_measured_fastest_for_the_leaf_block() {
+        for block in WideParams::LEAF_BLOCKS {
+            let k = Kernel::Auto.resolve_for(block);
+            assert_ne!(k, Kernel::Auto);
+            assert!(k.is_available());
+            let widest_useful = if block >= 16 { Kernel::available().last().copied() } else { None };
+            let want = widest_useful.unwrap_or(if Kernel::Avx2.is_available() { Kernel::Avx2 } else { Kernel::Scalar });
+            assert_eq!(k, want, "blocks of {block}");
+            assert_eq!(Kernel::Scalar.resolve_for(block), Kernel::Scalar);
+            assert_eq!(Kernel::Avx2.resolve_for(block), Kernel::Avx2);
+        }
     }
 
     #[test]
