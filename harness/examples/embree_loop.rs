@@ -9,7 +9,8 @@
 
 use std::time::Instant;
 
-use harness::peers::embree::abi::{RTC_INVALID_GEOMETRY_ID, RTCHit, RTCRay, RTCRayHit};
+use harness::peers::embree::abi::RTC_INVALID_GEOMETRY_ID;
+use harness::peers::embree::scene::ray_hit;
 use harness::peers::{EmbreeConfig, EmbreeDevice, EmbreeSpheres};
 use schema::EmbreeQuality;
 use tracer::accel::Null;
@@ -19,28 +20,12 @@ use tracer::geometry::Ray;
 use tracer::rays::{RayAnswers, RaySet, trace};
 use tracer::scene::SceneKind;
 
-/// `rtcIntersect1` on every ray in order, written as a C user would: one `RTCRayHit` on the stack per ray, the hit
-/// distance and primitive stored per ray (a miss as infinity and `u32::MAX`).
+/// `rtcIntersect1` on every ray in order, written as a C user would: one `RTCRayHit` on the stack per ray (the
+/// binding's conversion), the hit distance and primitive stored per ray (a miss as infinity and `u32::MAX`).
 fn plain_loop(scene: &EmbreeSpheres, rays: &[Ray], out: &mut [(f32, u32)]) {
     let (handle, api) = scene.raw();
     for (ray, o) in rays.iter().zip(out.iter_mut()) {
-        let mut rh = RTCRayHit {
-            ray: RTCRay {
-                org_x: ray.origin.x,
-                org_y: ray.origin.y,
-                org_z: ray.origin.z,
-                tnear: ray.t_min,
-                dir_x: ray.dir.x,
-                dir_y: ray.dir.y,
-                dir_z: ray.dir.z,
-                time: 0.0,
-                tfar: ray.t_max,
-                mask: u32::MAX,
-                id: 0,
-                flags: 0,
-            },
-            hit: RTCHit { geomID: RTC_INVALID_GEOMETRY_ID, instID: [RTC_INVALID_GEOMETRY_ID], ..RTCHit::default() },
-        };
+        let mut rh = ray_hit(ray);
         // SAFETY: a committed scene that outlives the call, an initialized 16-byte aligned RTCRayHit (its type's
         // alignment), NULL arguments (the defaults).
         unsafe { (api.intersect1)(handle, &mut rh, std::ptr::null_mut()) };

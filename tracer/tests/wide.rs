@@ -187,10 +187,16 @@ fn a_kernel_the_cpu_lacks_is_refused_at_validation_and_build() {
 }
 
 #[test]
-fn auto_runs_the_widest_kernel_available() {
+fn auto_runs_the_kernel_measured_fastest_for_its_leaf_block() {
     let spheres = SceneKind::RandomSpheres.generate(10, 1).spheres;
-    let tree = BuiltAccel::build(&spheres, &AccelParams { kind: AccelKind::WideBvh, ..AccelParams::default() });
-    assert_eq!(tree.kernel_name(), Some(Kernel::available().last().unwrap().name()));
+    let simd = |name: &str| Kernel::available().iter().any(|k| k.name() == name);
+    for (leaf_block, want) in [(4, "avx2"), (8, "avx2"), (16, "avx512")] {
+        let wide = WideParams { leaf_block, ..WideParams::default() };
+        let tree = BuiltAccel::build(&spheres, &AccelParams { kind: AccelKind::WideBvh, wide, ..AccelParams::default() });
+        // The widest kernel where it is measured fastest; AVX2 where the AVX-512 kernel is not; scalar without either.
+        let ran = [want, "avx2", "scalar"].into_iter().find(|k| simd(k)).unwrap();
+        assert_eq!(tree.kernel_name(), Some(ran), "blocks of {leaf_block}");
+    }
     assert_eq!(BuiltAccel::build(&spheres, &AccelParams::default()).kernel_name(), None);
 }
 

@@ -38,7 +38,7 @@ impl Drop for EmbreeSpheres {
 
 /// A ray in Embree's layout with an empty hit.
 #[inline(always)]
-fn ray_hit(ray: &Ray) -> RTCRayHit {
+pub fn ray_hit(ray: &Ray) -> RTCRayHit {
     RTCRayHit {
         ray: rtc_ray(ray),
         hit: RTCHit { geomID: RTC_INVALID_GEOMETRY_ID, instID: [RTC_INVALID_GEOMETRY_ID], ..RTCHit::default() },
