@@ -17,7 +17,8 @@ fn main() {
     let hash = std::fs::read(&lock).map_or_else(
         |_| "unknown".to_string(),
         |bytes| {
-            let h = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3));
+            let h =
+                bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3));
             format!("{h:016x}")
         },
     );

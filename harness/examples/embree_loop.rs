@@ -29,7 +29,11 @@ fn plain_loop(scene: &EmbreeSpheres, rays: &[Ray], out: &mut [(f32, u32)]) {
         // SAFETY: a committed scene that outlives the call, an initialized 16-byte aligned RTCRayHit (its type's
         // alignment), NULL arguments (the defaults).
         unsafe { (api.intersect1)(handle, &mut rh, std::ptr::null_mut()) };
-        *o = if rh.hit.geomID == RTC_INVALID_GEOMETRY_ID { (f32::INFINITY, u32::MAX) } else { (rh.ray.tfar, rh.hit.primID) };
+        *o = if rh.hit.geomID == RTC_INVALID_GEOMETRY_ID {
+            (f32::INFINITY, u32::MAX)
+        } else {
+            (rh.ray.tfar, rh.hit.primID)
+        };
     }
 }
 

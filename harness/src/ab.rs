@@ -369,7 +369,8 @@ fn running_is_build_of(root: &Path, rev: &str) -> Option<String> {
         return None;
     }
     let sources: Vec<&str> = crate::source_tree::SOURCES.to_vec();
-    let status = git(root, &[&["status", "--porcelain", "--untracked-files=all", "--ignored", "--"], &sources[..]].concat());
+    let status =
+        git(root, &[&["status", "--porcelain", "--untracked-files=all", "--ignored", "--"], &sources[..]].concat());
     let same_as_head = status.ok()?.is_empty();
     let diff = Command::new("git")
         .current_dir(root)
@@ -557,9 +558,8 @@ pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
         let e: Estimate = ratio_ci(&pair.new, &pair.old, seed_for(&c.id));
         (Speed::of(&e, request.min_effect, c.settings.strategy().threads == 1), e)
     };
-    let flagged: Vec<usize> = (0..all.len())
-        .filter(|&i| !request.no_confirm && speed(all[i], &pairs[i]).0 == Speed::Regressed)
-        .collect();
+    let flagged: Vec<usize> =
+        (0..all.len()).filter(|&i| !request.no_confirm && speed(all[i], &pairs[i]).0 == Speed::Regressed).collect();
     let mut again: Vec<Option<Pair>> = all.iter().map(|_| None).collect();
     if !flagged.is_empty() {
         note!("ab: {} configuration(s) flagged as slower: measuring them again", flagged.len());
@@ -663,9 +663,8 @@ mod tests {
         assert_eq!(confirmed(Speed::Regressed, Some(Speed::Improved)), Speed::Unchanged);
         assert_eq!(confirmed(Speed::Regressed, None), Speed::Regressed, "--no-confirm");
         assert_eq!(confirmed(Speed::Improved, None), Speed::Improved);
-        let failing = |second| {
-            failure(&[("a".into(), confirmed(Speed::Regressed, second), Answers::Same)], false).is_some()
-        };
+        let failing =
+            |second| failure(&[("a".into(), confirmed(Speed::Regressed, second), Answers::Same)], false).is_some();
         assert!(failing(Some(Speed::Regressed)) && !failing(Some(Speed::Unchanged)));
     }
 

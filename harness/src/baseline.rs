@@ -38,7 +38,8 @@ pub fn save(run_dir: &Path, name: &str, force: bool) -> Result<PathBuf, Error> {
         std::fs::copy(run_dir.join(f), dest.join(f)).map_err(|e| io(&dest.join(f), e))?;
     }
     let text = std::fs::read_to_string(run_dir.join(RUNS_CSV)).map_err(|e| io(&run_dir.join(RUNS_CSV), e))?;
-    let rows = schema::row::read_rows(&text).map_err(|e| Error::Input(format!("{}: {e}", run_dir.join(RUNS_CSV).display())))?;
+    let rows = schema::row::read_rows(&text)
+        .map_err(|e| Error::Input(format!("{}: {e}", run_dir.join(RUNS_CSV).display())))?;
     let field = |name: &str| rows.first().and_then(|r| r.cell(name)).map(|c| c.to_string()).unwrap_or_default();
     let note = format!(
         "# Baseline `{name}`\n\nSaved from `{}` by `harness baseline save`. Rows: {}. Recorded at commit {} (dirty: {}) on {} \

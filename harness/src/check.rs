@@ -100,7 +100,10 @@ fn measure_again(run_dir: &Path, exp: &Experiment, ids: &[String], confirm_csv: 
             candidates.push((variant, plan));
         }
     }
-    let pick = candidates.iter().position(|(v, _)| (v.repetitions.min()..=v.repetitions.max()).contains(&recorded)).unwrap_or(0);
+    let pick = candidates
+        .iter()
+        .position(|(v, _)| (v.repetitions.min()..=v.repetitions.max()).contains(&recorded))
+        .unwrap_or(0);
     let Some((variant, mut plan)) = candidates.into_iter().nth(pick) else {
         return Err(Error::Input(format!(
             "{}: the flagged configurations are not in the plan of {} (was it edited?)",

@@ -332,7 +332,9 @@ fn range(r: std::ops::RangeInclusive<u32>) -> std::ops::RangeInclusive<i64> {
 
 /// A parser accepting exactly the names of `T` (plus `aliases`), listed in `--help`.
 fn choice<T: Named>(aliases: &'static [(&'static str, T)]) -> impl TypedValueParser<Value = T> {
-    let values = T::ALL.iter().map(move |&t| aliases.iter().filter(|a| a.1 == t).fold(PossibleValue::new(t.name()), |v, a| v.alias(a.0)));
+    let values = T::ALL
+        .iter()
+        .map(move |&t| aliases.iter().filter(|a| a.1 == t).fold(PossibleValue::new(t.name()), |v, a| v.alias(a.0)));
     PossibleValuesParser::new(values).map(move |s| match aliases.iter().find(|a| a.0 == s) {
         Some(alias) => alias.1,
         None => T::from_name(&s).expect("clap checked the value"),

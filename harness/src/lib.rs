@@ -63,9 +63,10 @@ pub fn main() -> ExitCode {
             allow_different_answers: args.allow_different_answers,
             no_confirm: args.no_confirm,
         }),
-        Command::Baseline(BaselineCommand::Save { run_dir, name, force }) => baseline::save(&run_dir, &name, force).map(|dest| {
-            say!("baseline saved: {}", dest.display());
-        }),
+        Command::Baseline(BaselineCommand::Save { run_dir, name, force }) => baseline::save(&run_dir, &name, force)
+            .map(|dest| {
+                say!("baseline saved: {}", dest.display());
+            }),
         Command::Slurm(SlurmCommand::Submit(args)) => slurm::submit(&args),
         Command::Slurm(SlurmCommand::Resubmit { run_dir, dry_run }) => slurm::resubmit(&run_dir, dry_run),
         Command::Merge(args) => merge::run(&args.run_dir, args.allow_mixed_machines),
@@ -130,7 +131,9 @@ fn run_command(args: &RunArgs) -> Result<(), Error> {
         dir = slurm::shard_dir(&dir, i, n);
     }
     let existing = match (args.resume, args.force) {
-        (true, true) => return Err(Error::Input("--resume and --force: choose one (allowed: either, or neither)".into())),
+        (true, true) => {
+            return Err(Error::Input("--resume and --force: choose one (allowed: either, or neither)".into()));
+        }
         (true, false) => run::Existing::Resume,
         (false, true) => run::Existing::Replace,
         (false, false) => run::Existing::MoveAside,
@@ -141,8 +144,13 @@ fn run_command(args: &RunArgs) -> Result<(), Error> {
         let config = std::path::absolute(&args.config).unwrap_or_else(|_| args.config.clone());
         let skipped = before.iter().filter(|c| !plan.runs.iter().any(|r| r.config == **c));
         let skipped = skipped.map(|c| plan.configurations[*c].id.clone()).collect();
-        let info =
-            slurm::ShardInfo { shard: (i, n), config, config_hash: slurm::config_hash(&exp.text), quick: args.quick, skipped };
+        let info = slurm::ShardInfo {
+            shard: (i, n),
+            config,
+            config_hash: slurm::config_hash(&exp.text),
+            quick: args.quick,
+            skipped,
+        };
         std::fs::create_dir_all(&dir).map_err(|e| Error::Input(format!("{}: cannot create: {e}", dir.display())))?;
         slurm::write_json(&dir.join(slurm::SHARD_JSON), &info)?;
     }
@@ -169,9 +177,13 @@ fn skip_unavailable(exp: &Experiment, plan: &mut Plan, require_all: bool) -> Res
     }
     let Err(e) = peers::embree_status() else { return Ok(()) };
     if require_all {
-        return Err(Error::Input(format!("{}: accel embree/embree-packets: Embree 4 is unavailable: {e}", exp.path.display())));
+        return Err(Error::Input(format!(
+            "{}: accel embree/embree-packets: Embree 4 is unavailable: {e}",
+            exp.path.display()
+        )));
     }
-    let mut skipped: Vec<String> = plan.configurations.iter().enumerate().filter(|(i, _)| needs(*i)).map(|(_, c)| c.series.clone()).collect();
+    let mut skipped: Vec<String> =
+        plan.configurations.iter().enumerate().filter(|(i, _)| needs(*i)).map(|(_, c)| c.series.clone()).collect();
     skipped.dedup();
     plan.runs.retain(|r| !needs(r.config));
     let note = format!("Embree 4 is unavailable, so these series were skipped: {}. {e}", skipped.join(", "));
@@ -186,7 +198,8 @@ fn history_append(run_dir: &Path, dir: &Path) -> Result<(), Error> {
         return Err(Error::Input(format!("{}: no {} here (not a run folder)", run_dir.display(), run::RUNS_CSV)));
     }
     let exp = Experiment::load(&path)?;
-    let n = report::history::append(run_dir, &exp.report_spec(vec![]), dir, &Default::default()).map_err(|e| Error::Input(e.to_string()))?;
+    let n = report::history::append(run_dir, &exp.report_spec(vec![]), dir, &Default::default())
+        .map_err(|e| Error::Input(e.to_string()))?;
     say!("history: {n} speedups of {} appended to {}", run_dir.display(), dir.join("history.csv").display());
     Ok(())
 }
@@ -240,24 +253,40 @@ fn validate_command(args: &ValidateArgs) -> Result<(), Error> {
     let exp = load(&args.config, args.quick)?;
     let cores = render::available_threads();
     let plan = Plan::new(&exp, cores)?;
-    let seconds: f64 = plan.runs.iter().map(|r| plan::estimate_seconds(&plan.configurations[r.config].settings, cores)).sum();
-    let series: Vec<String> = exp.series.iter().map(|s| {
-        let n = plan.configurations.iter().filter(|c| c.series == s.label).count();
-        format!("{} ({n})", s.label)
-    }).collect();
+    let seconds: f64 =
+        plan.runs.iter().map(|r| plan::estimate_seconds(&plan.configurations[r.config].settings, cores)).sum();
+    let series: Vec<String> = exp
+        .series
+        .iter()
+        .map(|s| {
+            let n = plan.configurations.iter().filter(|c| c.series == s.label).count();
+            format!("{} ({n})", s.label)
+        })
+        .collect();
     say!("{}: ok", exp.path.display());
     say!("configurations {} ({})", plan.configurations.len(), series.join(", "));
     let each = match exp.repetitions {
         Repetitions::Fixed(n) => format!("{n} repetitions each"),
         Repetitions::Auto { min, max, target_width } => {
-            format!("auto: {min} to {max} repetitions each, until the median's 95% interval is within {:.1}%", target_width * 100.0)
+            format!(
+                "auto: {min} to {max} repetitions each, until the median's 95% interval is within {:.1}%",
+                target_width * 100.0
+            )
         }
     };
     let warmups = plan.runs.len() - plan.recorded_runs();
-    say!("runs           at most {} recorded ({each}) + {warmups} warm-ups, order {}", plan.recorded_runs(), format!("{:?}", exp.order).to_lowercase());
+    say!(
+        "runs           at most {} recorded ({each}) + {warmups} warm-ups, order {}",
+        plan.recorded_runs(),
+        format!("{:?}", exp.order).to_lowercase()
+    );
     let fewest = exp.repetitions.min() as f64 / exp.repetitions.max() as f64;
     if fewest < 1.0 {
-        say!("estimate       ~{:.0} to ~{:.0} s on {cores} cores (rough cost model, within about 2x)", seconds * fewest, seconds);
+        say!(
+            "estimate       ~{:.0} to ~{:.0} s on {cores} cores (rough cost model, within about 2x)",
+            seconds * fewest,
+            seconds
+        );
     } else {
         say!("estimate       ~{:.0} s on {cores} cores (rough cost model, within about 2x)", seconds);
     }

@@ -18,13 +18,7 @@ pub fn run() {
     let names = |peers: &[&PeerKind]| peers.iter().map(|p| p.name()).collect::<Vec<_>>().join(", ");
     let obvhs: Vec<&PeerKind> = PeerKind::ALL.iter().filter(|p| p.is_obvhs()).collect();
     let embree: Vec<&PeerKind> = PeerKind::ALL.iter().filter(|p| p.needs_embree()).collect();
-    say!(
-        "{:<12} {}: built in (obvhs 0.4; {}: {})",
-        "",
-        names(&obvhs),
-        Axis::obvhs_build.key(),
-        ObvhsQuality::names()
-    );
+    say!("{:<12} {}: built in (obvhs 0.4; {}: {})", "", names(&obvhs), Axis::obvhs_build.key(), ObvhsQuality::names());
     match crate::peers::embree_status() {
         Ok(info) => say!("{:<12} {}: available (Embree {} from {})", "", names(&embree), info.version, info.path),
         Err(e) => say!("{:<12} {}: unavailable: {e}", "", names(&embree)),
@@ -37,8 +31,10 @@ pub fn run() {
     say!("{:<12} {} (wide-bvh {})", "node widths", ints(&WideParams::WIDTHS), Axis::node_width.key());
     say!("{:<12} {} (wide-bvh {})", "leaf blocks", ints(&WideParams::LEAF_BLOCKS), Axis::leaf_block.key());
     let here: Vec<&str> = Kernel::available().into_iter().map(Kernel::name).collect();
-    let auto: Vec<String> =
-        WideParams::LEAF_BLOCKS.iter().map(|&b| format!("{} for blocks of {b}", Kernel::Auto.resolve_for(b).name())).collect();
+    let auto: Vec<String> = WideParams::LEAF_BLOCKS
+        .iter()
+        .map(|&b| format!("{} for blocks of {b}", Kernel::Auto.resolve_for(b).name()))
+        .collect();
     say!(
         "{:<12} {} (wide-bvh {}; this CPU runs: {}; auto = {})",
         "kernels",

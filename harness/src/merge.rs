@@ -19,7 +19,8 @@ use crate::slurm::{SHARD_JSON, ShardInfo, config_hash, read_json, shard_dir};
 
 /// The rows of a `runs.csv`, a partial last line (a killed run) left out.
 pub fn read_log(path: &Path) -> Result<Vec<Row>, Error> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Input(format!("{}: cannot read: {e}", path.display())))?;
+    let text =
+        std::fs::read_to_string(path).map_err(|e| Error::Input(format!("{}: cannot read: {e}", path.display())))?;
     let complete = text.rfind('\n').map_or(0, |i| i + 1);
     schema::row::read_rows(&text[..complete]).map_err(|e| Error::Input(format!("{}: {e}", path.display())))
 }
@@ -37,7 +38,8 @@ fn planned(plan: &Plan, shard_of: &[usize], i: usize) -> Vec<(String, u32)> {
 /// never timed, so its one row completes it; one `skipped` for want of its backend has none).
 fn absent(plan: &Plan, shard_of: &[usize], i: usize, rows: &[Row], skipped: &[String]) -> Vec<(String, u32)> {
     let done: HashSet<(&str, u32)> = rows.iter().map(|r| (r.config_id.as_str(), r.repetition)).collect();
-    let mut complete: HashSet<&str> = rows.iter().filter(|r| r.validation == "FAILED").map(|r| r.config_id.as_str()).collect();
+    let mut complete: HashSet<&str> =
+        rows.iter().filter(|r| r.validation == "FAILED").map(|r| r.config_id.as_str()).collect();
     complete.extend(skipped.iter().map(String::as_str));
     planned(plan, shard_of, i)
         .into_iter()
@@ -57,7 +59,8 @@ pub fn missing_rows(plan: &Plan, dir: &Path, i: usize, n: usize) -> Result<usize
 
 /// The shard folders of `run_dir`: N and their paths by I.
 fn shard_folders(run_dir: &Path) -> Result<(usize, BTreeMap<usize, PathBuf>), Error> {
-    let entries = std::fs::read_dir(run_dir).map_err(|e| Error::Input(format!("{}: cannot read: {e}", run_dir.display())))?;
+    let entries =
+        std::fs::read_dir(run_dir).map_err(|e| Error::Input(format!("{}: cannot read: {e}", run_dir.display())))?;
     let mut found: BTreeMap<usize, BTreeMap<usize, PathBuf>> = BTreeMap::new();
     for entry in entries.flatten() {
         let name = entry.file_name().to_string_lossy().into_owned();
@@ -120,7 +123,8 @@ fn read_shards(run_dir: &Path) -> Result<Vec<Shard>, Error> {
             )));
         }
         let copy = dir.join(CONFIG_COPY);
-        let text = std::fs::read_to_string(&copy).map_err(|e| Error::Input(format!("{}: cannot read: {e}", copy.display())))?;
+        let text = std::fs::read_to_string(&copy)
+            .map_err(|e| Error::Input(format!("{}: cannot read: {e}", copy.display())))?;
         if config_hash(&text) != info.config_hash {
             return Err(Error::Input(format!(
                 "{}: config hash {} differs from the {} its {SHARD_JSON} records",
@@ -164,7 +168,9 @@ fn machines(shards: &[Shard]) -> BTreeMap<String, (String, BTreeSet<String>, BTr
     let mut out: BTreeMap<String, (String, BTreeSet<String>, BTreeSet<usize>)> = BTreeMap::new();
     for s in shards {
         for r in s.rows.iter().filter(|r| !r.machine_id.is_empty()) {
-            let e = out.entry(r.machine_id.clone()).or_insert_with(|| (r.cpu_model.clone(), BTreeSet::new(), BTreeSet::new()));
+            let e = out
+                .entry(r.machine_id.clone())
+                .or_insert_with(|| (r.cpu_model.clone(), BTreeSet::new(), BTreeSet::new()));
             if !r.node.is_empty() {
                 e.1.insert(r.node.clone());
             }
@@ -279,7 +285,8 @@ pub fn run(run_dir: &Path, allow_mixed_machines: bool) -> Result<(), Error> {
     }
     let copy = run_dir.join(CONFIG_COPY);
     std::fs::write(&copy, &first.text).map_err(|e| io(&copy, e))?;
-    let jobs: BTreeSet<&str> = shards.iter().flat_map(|s| &s.rows).map(|r| r.slurm_job_id.as_str()).filter(|j| !j.is_empty()).collect();
+    let jobs: BTreeSet<&str> =
+        shards.iter().flat_map(|s| &s.rows).map(|r| r.slurm_job_id.as_str()).filter(|j| !j.is_empty()).collect();
     let mut note = format!("Merged from {n} shards by `harness merge` (whole scene cells per shard)");
     if !jobs.is_empty() {
         note.push_str(&format!("; Slurm jobs {}", jobs.into_iter().collect::<Vec<_>>().join(", ")));

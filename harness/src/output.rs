@@ -24,7 +24,11 @@ pub fn write_or_exit(to_stderr: bool, text: std::fmt::Arguments<'_>) {
         Ok(()) => {}
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
         Err(e) => {
-            let _ = writeln!(std::io::stderr(), "error: cannot write to {}: {e}", if to_stderr { "stderr" } else { "stdout" });
+            let _ = writeln!(
+                std::io::stderr(),
+                "error: cannot write to {}: {e}",
+                if to_stderr { "stderr" } else { "stdout" }
+            );
             std::process::exit(1);
         }
     }

@@ -180,7 +180,10 @@ fn wide_bvh_runs_validated_and_records_its_kernel() {
     // Every kernel answers alike: the same answer hash and counters for both kernels of one width and workload.
     for a in &rows {
         for b in rows.iter().filter(|b| b.node_width == a.node_width && b.workload == a.workload) {
-            assert_eq!((&a.image_hash, a.nodes_per_ray, a.prim_tests_per_ray), (&b.image_hash, b.nodes_per_ray, b.prim_tests_per_ray));
+            assert_eq!(
+                (&a.image_hash, a.nodes_per_ray, a.prim_tests_per_ray),
+                (&b.image_hash, b.nodes_per_ray, b.prim_tests_per_ray)
+            );
         }
     }
 
@@ -210,7 +213,11 @@ fn a_packet_size_not_allowed_is_one_line_exit_2_and_nothing_written() {
     let dir = temp("packet");
     let cfg = dir.join("packet.toml");
     let wide = AccelKind::WideBvh.name();
-    std::fs::write(&cfg, format!("name = \"t\"\n[sweep]\naccel = \"{wide}\"\nworkload = \"primary\"\npacket_size = 4\n")).unwrap();
+    std::fs::write(
+        &cfg,
+        format!("name = \"t\"\n[sweep]\naccel = \"{wide}\"\nworkload = \"primary\"\npacket_size = 4\n"),
+    )
+    .unwrap();
     let out = dir.join("out");
     let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
     let err = stderr(&o);
@@ -317,7 +324,8 @@ fn a_killed_sweep_resumes_without_losing_or_duplicating_rows() {
 fn runs_into_one_folder_keep_every_earlier_run() {
     let dir = temp("keep");
     let cfg = dir.join("keep.toml");
-    std::fs::write(&cfg, "name = \"keep\"\nrepetitions = 2\n[sweep]\nobjects = [10, 20]\nwidth = 32\nheight = 16\n").unwrap();
+    std::fs::write(&cfg, "name = \"keep\"\nrepetitions = 2\n[sweep]\nobjects = [10, 20]\nwidth = 32\nheight = 16\n")
+        .unwrap();
     let out = dir.join("out");
     let run = || harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
     let timestamps = |runs: &Path| column(runs, "timestamp");
@@ -339,16 +347,31 @@ fn runs_into_one_folder_keep_every_earlier_run() {
     assert!(!out.join("previous/previous").exists(), "earlier runs are not nested");
 
     let o = harness()
-        .args(["check", out.to_str().unwrap(), "--baseline", out.join("previous").to_str().unwrap(), "--timings-for-information"])
+        .args([
+            "check",
+            out.to_str().unwrap(),
+            "--baseline",
+            out.join("previous").to_str().unwrap(),
+            "--timings-for-information",
+        ])
         .output()
         .unwrap();
-    assert_eq!(o.status.code(), Some(0), "check against previous/: {}{}", String::from_utf8_lossy(&o.stdout), stderr(&o));
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "check against previous/: {}{}",
+        String::from_utf8_lossy(&o.stdout),
+        stderr(&o)
+    );
 
     let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--force"]).output().unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!out.join("previous-2").exists(), "--force replaces without moving aside");
     let before = std::fs::read_to_string(out.join("runs.csv")).unwrap();
-    let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--resume", "--force"]).output().unwrap();
+    let o = harness()
+        .args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--resume", "--force"])
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert_eq!(stderr(&o).lines().count(), 1, "{}", stderr(&o));
     assert_eq!(std::fs::read_to_string(out.join("runs.csv")).unwrap(), before, "nothing written");
@@ -605,7 +628,9 @@ fn ab_against_head_reports_ratios_near_one() {
     // times a tiny config with both builds, interleaved. The working tree's code is HEAD's or a small change of
     // it: no regression, the same answers.
     let dir = temp("ab");
-    let sweep = format!("[sweep]\naccel = \"{flat}\"\ntraversal = \"{front_to_back}\"\nobjects = 3000\nwidth = 96\nheight = 64\nworkload = \"primary\"\n");
+    let sweep = format!(
+        "[sweep]\naccel = \"{flat}\"\ntraversal = \"{front_to_back}\"\nobjects = 3000\nwidth = 96\nheight = 64\nworkload = \"primary\"\n"
+    );
     let cfg = dir.join("ab.toml");
     std::fs::write(&cfg, format!("name = \"ab\"\nrepetitions = 6\nwarmups = 1\n{sweep}")).unwrap();
     let binary = Path::new(env!("CARGO_BIN_EXE_harness"));

@@ -33,7 +33,8 @@ fn tiny(dir: &Path) -> PathBuf {
 /// Runs `harness run CONFIG --shard I/N --out RUN` (into `RUN/shard-I-of-N/`) for every shard.
 fn run_shards(config: &Path, run: &Path, n: usize) {
     for i in 1..=n {
-        let o = harness().arg("run").arg(config).args(["--shard", &format!("{i}/{n}"), "--out"]).arg(run).output().unwrap();
+        let o =
+            harness().arg("run").arg(config).args(["--shard", &format!("{i}/{n}"), "--out"]).arg(run).output().unwrap();
         assert!(o.status.success(), "shard {i}: {}", stderr(&o));
         assert!(run.join(format!("shard-{i}-of-{n}/runs.csv")).is_file(), "shard {i} ran into its shard folder");
     }
@@ -43,7 +44,11 @@ fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
     for entry in std::fs::read_dir(from).unwrap().flatten() {
         let target = to.join(entry.file_name());
-        if entry.path().is_dir() { copy_dir(&entry.path(), &target) } else { std::fs::copy(entry.path(), target).map(|_| ()).unwrap() }
+        if entry.path().is_dir() {
+            copy_dir(&entry.path(), &target)
+        } else {
+            std::fs::copy(entry.path(), target).map(|_| ()).unwrap()
+        }
     }
 }
 
@@ -130,7 +135,10 @@ fn dry_run_prints_both_scripts_and_writes_nothing() {
     let hash = text.split("--config-hash ").nth(1).unwrap().split(' ').next().unwrap();
     assert!(hash.len() == 16 && hash.chars().all(|c| c.is_ascii_hexdigit()), "{hash}");
     assert!(!run.exists(), "a dry run writes nothing");
-    let o = harness().args(["slurm", "submit", "experiments/ci.toml", "--quick", "--shards", "3", "--dry-run"]).output().unwrap();
+    let o = harness()
+        .args(["slurm", "submit", "experiments/ci.toml", "--quick", "--shards", "3", "--dry-run"])
+        .output()
+        .unwrap();
     refused(&o, &dir, "--shards 3: experiments/ci.toml has only 2 scene cells");
     let o = harness()
         .args(["slurm", "submit", "experiments/ci.toml", "--quick", "--shards", "2", "--no-exclusive", "--dry-run"])
@@ -160,24 +168,45 @@ fn submit_and_resubmit_against_a_fake_sbatch() {
     let dir = temp("submit");
     let (config, run) = (tiny(&dir), dir.join("run"));
     let path = fake_slurm(&dir);
-    let o = harness().args(["slurm", "submit"]).arg(&config).args(["--shards", "2", "--out"]).arg(&run).env("PATH", &path).output().unwrap();
+    let o = harness()
+        .args(["slurm", "submit"])
+        .arg(&config)
+        .args(["--shards", "2", "--out"])
+        .arg(&run)
+        .env("PATH", &path)
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     let out = stdout(&o);
     assert!(out.contains("array job 1001 (2 shards, at most 2 at once)") && out.contains("merge job 1002"), "{out}");
     let calls = std::fs::read_to_string(dir.join("sbatch.log")).unwrap();
     let calls: Vec<&str> = calls.lines().collect();
-    assert_eq!(calls, [format!("--parsable {}/slurm/job.sbatch", run.display()), format!("--parsable {}/slurm/merge.sbatch", run.display())]);
+    assert_eq!(
+        calls,
+        [
+            format!("--parsable {}/slurm/job.sbatch", run.display()),
+            format!("--parsable {}/slurm/merge.sbatch", run.display())
+        ]
+    );
     let job = std::fs::read_to_string(run.join("slurm/job.sbatch")).unwrap();
     assert!(job.contains("#SBATCH --array=0-1%2\n"), "{job}");
     let merge = std::fs::read_to_string(run.join("slurm/merge.sbatch")).unwrap();
     assert!(merge.contains("#SBATCH --dependency=afterany:1001\n"), "{merge}");
-    let jobs: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(run.join("slurm/jobs.json")).unwrap()).unwrap();
+    let jobs: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("slurm/jobs.json")).unwrap()).unwrap();
     assert_eq!(jobs["submissions"][0]["array_job_id"], "1001");
     assert_eq!(jobs["submissions"][0]["merge_job_id"], "1002");
     assert_eq!(jobs["options"]["shards"], 2);
     assert!(run.join("slurm/logs").is_dir());
     // Submitting twice into one folder is refused.
-    let o = harness().args(["slurm", "submit"]).arg(&config).args(["--shards", "2", "--out"]).arg(&run).env("PATH", &path).output().unwrap();
+    let o = harness()
+        .args(["slurm", "submit"])
+        .arg(&config)
+        .args(["--shards", "2", "--out"])
+        .arg(&run)
+        .env("PATH", &path)
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("already submitted"), "{}", stderr(&o));
 
@@ -193,7 +222,8 @@ fn submit_and_resubmit_against_a_fake_sbatch() {
     assert!(job.contains("#SBATCH --array=1%2\n"), "{job}");
     let merge = std::fs::read_to_string(run.join("slurm/merge.sbatch")).unwrap();
     assert!(merge.contains("#SBATCH --dependency=afterany:1003\n"), "{merge}");
-    let jobs: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(run.join("slurm/jobs.json")).unwrap()).unwrap();
+    let jobs: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("slurm/jobs.json")).unwrap()).unwrap();
     assert_eq!(jobs["submissions"][1]["tasks"], serde_json::json!([1]));
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -232,7 +262,12 @@ fn merge_equals_the_unsharded_run_and_refuses_bad_shards() {
         std::fs::write(&path, f(text)).unwrap();
     };
     let first_row = |run: &Path, i: usize| {
-        std::fs::read_to_string(run.join(format!("shard-{i}-of-3/runs.csv"))).unwrap().lines().nth(1).unwrap().to_string()
+        std::fs::read_to_string(run.join(format!("shard-{i}-of-3/runs.csv")))
+            .unwrap()
+            .lines()
+            .nth(1)
+            .unwrap()
+            .to_string()
     };
 
     let run = case("missing", &|r| std::fs::remove_dir_all(r.join("shard-2-of-3")).unwrap());
@@ -259,12 +294,15 @@ fn merge_equals_the_unsharded_run_and_refuses_bad_shards() {
     });
     refused(&merge(&run, &[]), &run, "shard 3 of 3 lacks 1 of its");
 
-    let commit = |r: &Path| schema::row::read_rows(&std::fs::read_to_string(r.join("shard-1-of-3/runs.csv")).unwrap()).unwrap()[0].clone();
+    let commit = |r: &Path| {
+        schema::row::read_rows(&std::fs::read_to_string(r.join("shard-1-of-3/runs.csv")).unwrap()).unwrap()[0].clone()
+    };
     let row = commit(&good);
     let run = case("commits", &|r| edit(r.join("shard-2-of-3/runs.csv"), &|t| t.replace(&row.git_commit, "0badc0de")));
     refused(&merge(&run, &[]), &run, "shards come from different commits");
 
-    let run = case("machines", &|r| edit(r.join("shard-3-of-3/runs.csv"), &|t| t.replace(&row.machine_id, "0000deadbeef")));
+    let run =
+        case("machines", &|r| edit(r.join("shard-3-of-3/runs.csv"), &|t| t.replace(&row.machine_id, "0000deadbeef")));
     refused(&merge(&run, &[]), &run, "rows of 2 machines: ");
     let e = stderr(&merge(&run, &[]));
     assert!(e.contains("0000deadbeef (") && e.contains(&format!("{} (", row.machine_id)), "{e}");
@@ -277,7 +315,9 @@ fn merge_equals_the_unsharded_run_and_refuses_bad_shards() {
     // A configuration skipped for want of its backend (Embree) on a node is not missing.
     let run = case("skipped", &|r| {
         let id = first_row(r, 1).split(',').nth(1).unwrap().to_string();
-        edit(r.join("shard-1-of-3/runs.csv"), &|t| t.lines().filter(|l| !l.contains(&id)).map(|l| format!("{l}\n")).collect());
+        edit(r.join("shard-1-of-3/runs.csv"), &|t| {
+            t.lines().filter(|l| !l.contains(&id)).map(|l| format!("{l}\n")).collect()
+        });
         refused(&merge(r, &[]), r, "shard 1 of 3 lacks 2 of its");
         edit(r.join("shard-1-of-3/shard.json"), &|t| t.replace("\"skipped\": []", &format!("\"skipped\": [\"{id}\"]")));
     });
@@ -285,7 +325,9 @@ fn merge_equals_the_unsharded_run_and_refuses_bad_shards() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(std::fs::read_to_string(run.join("REPORT.md")).unwrap().contains("1 configurations were skipped"));
 
-    let run = case("other-config", &|r| edit(r.join("shard-2-of-3/experiment.toml"), &|t| t.replace("repetitions = 2", "repetitions = 3")));
+    let run = case("other-config", &|r| {
+        edit(r.join("shard-2-of-3/experiment.toml"), &|t| t.replace("repetitions = 2", "repetitions = 3"))
+    });
     refused(&merge(&run, &[]), &run, "differs from the");
     let _ = std::fs::remove_dir_all(&dir);
 }

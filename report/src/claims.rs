@@ -216,6 +216,10 @@ mod tests {
         assert_eq!(judge(&kind, &point(1.1, 1.3, 8.0, 4.0)).verdict, Verdict::Holds);
         assert_eq!(judge(&kind, &point(0.7, 0.9, 8.0, 4.0)).verdict, Verdict::Fails);
         assert_eq!(judge(&kind, &point(1.1, 1.3, 8.0, 1.0)).verdict, Verdict::Fails, "against one thread: 4");
-        assert_eq!(judge(&kind, &point(1.1, 1.3, 2.0, f64::NAN)).verdict, Verdict::Holds, "other side unknown: 0.5 × 2");
+        assert_eq!(
+            judge(&kind, &point(1.1, 1.3, 2.0, f64::NAN)).verdict,
+            Verdict::Holds,
+            "other side unknown: 0.5 × 2"
+        );
     }
 }

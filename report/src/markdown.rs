@@ -20,16 +20,20 @@ pub fn report(rows: &Rows, spec: &ReportSpec, claims: &[ClaimResult]) -> String 
         let _ = writeln!(md, "> **Warning:** {}\n", cell(warning));
     }
     if !rows.failed.is_empty() {
-        md.push_str("## ⚠ VALIDATION FAILURES
+        md.push_str(
+            "## ⚠ VALIDATION FAILURES
 
-");
+",
+        );
         md.push_str("These configurations disagreed with the reference before timing and were **not timed**; their series lack these points.
 
 ");
-        md.push_str("Each disagreement was decided by an f64 brute force: `wrong` says whose answer it showed wrong \
+        md.push_str(
+            "Each disagreement was decided by an f64 brute force: `wrong` says whose answer it showed wrong \
 (beyond the f32 rounding bound of the ray-sphere test); grazing rays (within it) are tolerated and counted apart.
 
-");
+",
+        );
         md.push_str("| series | accel | scene | objects | seed | workload | threads | rays disagreeing | wrong | grazing (tolerated) | reference |
 |---|---|---|---|---|---|---|---|---|---|---|
 ");
@@ -37,8 +41,16 @@ pub fn report(rows: &Rows, spec: &ReportSpec, claims: &[ClaimResult]) -> String 
             let _ = writeln!(
                 md,
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                r.series(), r.text("accel"), r.text("scene"), r.text("objects"), r.text("seed"), r.text("workload"),
-                r.text("threads"), r.text("mismatches"), r.text("wrong_side"), r.text("grazing"),
+                r.series(),
+                r.text("accel"),
+                r.text("scene"),
+                r.text("objects"),
+                r.text("seed"),
+                r.text("workload"),
+                r.text("threads"),
+                r.text("mismatches"),
+                r.text("wrong_side"),
+                r.text("grazing"),
                 r.text("validated_against")
             );
         }
@@ -252,7 +264,8 @@ fn machines(md: &mut String, runs: &[Run]) {
         }
     }
     if seen.len() > 1 {
-        let _ = writeln!(md, "  - rows of different machines are never pooled: each machine's runs are their own points");
+        let _ =
+            writeln!(md, "  - rows of different machines are never pooled: each machine's runs are their own points");
     }
 }
 
@@ -384,9 +397,11 @@ fn across_machines(md: &mut String, rows: &Rows, spec: &ReportSpec) {
         .filter(|c| *c != "seed" && *c != "machine_id")
         .filter(|c| runs.iter().map(|r| r.text(c)).collect::<BTreeSet<_>>().len() > 1)
         .collect();
-    md.push_str("## Across machines
+    md.push_str(
+        "## Across machines
 
-");
+",
+    );
     let _ = writeln!(
         md,
         "Rows come from {} machines. Speedups over {reference} are taken within each machine (against the reference's \
@@ -402,7 +417,9 @@ fn across_machines(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     // Seed pools (one machine each) grouped by everything but the machine.
     let mut groups: Vec<(Vec<String>, Vec<Vec<&Run>>)> = Vec::new();
     for pool in pool::seed_pools(runs) {
-        let key = schema::row::pool_key(pool[0].series(), |c| if c == "machine_id" { String::new() } else { pool[0].text(c).to_string() });
+        let key = schema::row::pool_key(pool[0].series(), |c| {
+            if c == "machine_id" { String::new() } else { pool[0].text(c).to_string() }
+        });
         match groups.iter_mut().find(|(k, _)| *k == key) {
             Some((_, pools)) => pools.push(pool),
             None => groups.push((key, vec![pool])),

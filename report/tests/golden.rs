@@ -22,7 +22,15 @@ fn golden_rows() -> String {
 }
 
 fn claim(text: &str, kind: ClaimKind, min_objects: Option<u64>) -> ClaimSpec {
-    ClaimSpec { text: text.into(), paper: None, kind, metric: "total_s".into(), min_objects, max_objects: None, filter: vec![] }
+    ClaimSpec {
+        text: text.into(),
+        paper: None,
+        kind,
+        metric: "total_s".into(),
+        min_objects,
+        max_objects: None,
+        filter: vec![],
+    }
 }
 
 fn faster(factor: f64, per_thread: bool) -> ClaimKind {
@@ -44,8 +52,11 @@ fn plot(file: &str, title: &str, kind: PlotKind, x: &str, log: bool) -> PlotSpec
 }
 
 fn spec() -> ReportSpec {
-    let fixed: Vec<String> =
-        schema::row::setting_names().into_iter().filter(|c| !["objects", "seed"].contains(c)).map(String::from).collect();
+    let fixed: Vec<String> = schema::row::setting_names()
+        .into_iter()
+        .filter(|c| !["objects", "seed"].contains(c))
+        .map(String::from)
+        .collect();
     let mut paper_claim = claim("BVH is at least 2× faster than the list", faster(2.0, true), None);
     paper_claim.paper = Some("the BVH is much faster".into());
     ReportSpec {
@@ -167,7 +178,11 @@ fn golden_report() {
     }
     let metric_svg = std::fs::read_to_string(dir.join("figures/total_vs_objects.svg")).unwrap();
     assert!(metric_svg.contains(LIST) && metric_svg.contains("total time (s)"));
-    assert!(std::fs::read_to_string(dir.join("figures/speedup.svg")).unwrap().contains("speedup in total_s vs serial·list (×)"));
+    assert!(
+        std::fs::read_to_string(dir.join("figures/speedup.svg"))
+            .unwrap()
+            .contains("speedup in total_s vs serial·list (×)")
+    );
 
     // REPORT.md.
     let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
@@ -266,7 +281,10 @@ fn failed_validation_is_excluded_and_announced_and_filters_narrow_plots() {
     let unfiltered = run_dir("unfiltered", &golden);
     report::write(&unfiltered, &self::spec()).unwrap();
     let all = std::fs::read_to_string(unfiltered.join("figures/total_vs_objects.svg")).unwrap();
-    assert!(svg.matches("<polyline").count() < all.matches("<polyline").count(), "the filter drops the 10-object points");
+    assert!(
+        svg.matches("<polyline").count() < all.matches("<polyline").count(),
+        "the filter drops the 10-object points"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
     std::fs::remove_dir_all(&unfiltered).unwrap();
 }
@@ -285,7 +303,9 @@ fn rows_of_two_machines_are_never_pooled() {
         let doubled: Vec<String> = fields
             .iter()
             .enumerate()
-            .map(|(i, f)| if (18..=22).contains(&i) { (f.parse::<f64>().unwrap() * 2.0).to_string() } else { f.clone() })
+            .map(
+                |(i, f)| if (18..=22).contains(&i) { (f.parse::<f64>().unwrap() * 2.0).to_string() } else { f.clone() },
+            )
             .collect();
         slow.push_str(&format!("{},bbbbbbbbbbbb\n", doubled.join(",")));
     }

@@ -81,7 +81,9 @@ mod tests {
         assert!(fixed_axes(&BTreeMap::from([(Axis::strategy, vec![serial])])).contains(&Axis::threads));
         let wide = AxisValue::accel(Accel::Ours(AccelKind::WideBvh));
         let fixed = fixed_axes(&BTreeMap::from([(Axis::accel, vec![wide])]));
-        assert!(fixed.contains(&Axis::traversal) && !fixed.contains(&Axis::node_width) && !fixed.contains(&Axis::split));
+        assert!(
+            fixed.contains(&Axis::traversal) && !fixed.contains(&Axis::node_width) && !fixed.contains(&Axis::split)
+        );
         let flat = AxisValue::accel(Accel::Ours(AccelKind::FlatBvh));
         assert!(fixed_axes(&BTreeMap::from([(Axis::accel, vec![flat])])).contains(&Axis::simd_kernel));
     }
@@ -103,7 +105,11 @@ mod tests {
                 for value in axis.choices().unwrap_or_default() {
                     let mut s = base.clone();
                     s.set(value.clone());
-                    assert_eq!(applies(&s), want, "{axis:?} = {value} changes what applies: add it to APPLICABILITY_INPUTS");
+                    assert_eq!(
+                        applies(&s),
+                        want,
+                        "{axis:?} = {value} changes what applies: add it to APPLICABILITY_INPUTS"
+                    );
                 }
             }
             true

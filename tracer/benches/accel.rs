@@ -12,7 +12,9 @@ use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use tracer::accel::wide::Kernel;
-use tracer::accel::{AccelKind, AccelParams, AccelVisitor, Accelerator, BuiltAccel, BvhParams, Split, Traversal, WideBvh, WideParams};
+use tracer::accel::{
+    AccelKind, AccelParams, AccelVisitor, Accelerator, BuiltAccel, BvhParams, Split, Traversal, WideBvh, WideParams,
+};
 use tracer::counters::NoCounters;
 use tracer::executor::Strategy;
 use tracer::render::trace_primary;
@@ -23,9 +25,17 @@ const SIZES: [usize; 3] = [1_000, 10_000, 100_000];
 fn tree_params() -> Vec<AccelParams> {
     let mut all = Vec::new();
     for split in Split::ALL {
-        all.push(AccelParams { kind: AccelKind::Bvh, bvh: BvhParams { split, ..BvhParams::default() }, ..AccelParams::default() });
+        all.push(AccelParams {
+            kind: AccelKind::Bvh,
+            bvh: BvhParams { split, ..BvhParams::default() },
+            ..AccelParams::default()
+        });
         for traversal in Traversal::ALL {
-            all.push(AccelParams { kind: AccelKind::FlatBvh, bvh: BvhParams { split, traversal, ..BvhParams::default() }, ..AccelParams::default() });
+            all.push(AccelParams {
+                kind: AccelKind::FlatBvh,
+                bvh: BvhParams { split, traversal, ..BvhParams::default() },
+                ..AccelParams::default()
+            });
         }
     }
     all
@@ -69,7 +79,11 @@ fn build_threads(c: &mut Criterion) {
         let scene = SceneKind::RandomSpheres.generate(n, 1);
         group.throughput(Throughput::Elements(n as u64));
         for split in [Split::CentroidMidpoint, Split::BinnedSah] {
-            let p = AccelParams { kind: AccelKind::FlatBvh, bvh: BvhParams { split, ..BvhParams::default() }, ..AccelParams::default() };
+            let p = AccelParams {
+                kind: AccelKind::FlatBvh,
+                bvh: BvhParams { split, ..BvhParams::default() },
+                ..AccelParams::default()
+            };
             for (threads, pool) in &pools {
                 let id = BenchmarkId::new(format!("flat-bvh/{}/threads={threads}", split.name()), n);
                 group.bench_function(id, |b| {
@@ -96,10 +110,16 @@ fn primary(c: &mut Criterion) {
         let scene = SceneKind::RandomSpheres.generate(n, 1);
         let list = AccelParams { kind: AccelKind::List, ..AccelParams::default() };
         for p in std::iter::once(list).chain(tree_params()) {
-            let camera = if p.kind == AccelKind::List { scene.camera.with_resolution(64, 48) } else { scene.camera.with_resolution(256, 192) };
+            let camera = if p.kind == AccelKind::List {
+                scene.camera.with_resolution(64, 48)
+            } else {
+                scene.camera.with_resolution(256, 192)
+            };
             let accel = BuiltAccel::build(&scene.spheres, &p);
             group.throughput(Throughput::Elements(camera.width as u64 * camera.height as u64));
-            group.bench_function(BenchmarkId::new(label(&p), n), |b| b.iter(|| black_box(accel.visit(Primary(&camera)))));
+            group.bench_function(BenchmarkId::new(label(&p), n), |b| {
+                b.iter(|| black_box(accel.visit(Primary(&camera))))
+            });
         }
     }
     group.finish();
@@ -118,11 +138,20 @@ fn wide(c: &mut Criterion) {
         let camera = scene.camera.with_resolution(256, 192);
         group.throughput(Throughput::Elements(camera.width as u64 * camera.height as u64));
         let flat = BvhParams { split: Split::BinnedSah, traversal: Traversal::FrontToBack, ..BvhParams::default() };
-        let accel = BuiltAccel::build(&scene.spheres, &AccelParams { kind: AccelKind::FlatBvh, bvh: flat, ..AccelParams::default() });
-        group.bench_function(BenchmarkId::new("flat-bvh/binned-sah/front-to-back", n), |b| b.iter(|| black_box(accel.visit(Primary(&camera)))));
+        let accel = BuiltAccel::build(
+            &scene.spheres,
+            &AccelParams { kind: AccelKind::FlatBvh, bvh: flat, ..AccelParams::default() },
+        );
+        group.bench_function(BenchmarkId::new("flat-bvh/binned-sah/front-to-back", n), |b| {
+            b.iter(|| black_box(accel.visit(Primary(&camera))))
+        });
         let bvh = BvhParams { leaf_size: 8, ..flat };
         for width in WideParams::WIDTHS {
-            let tree = WideBvh::build(&scene.spheres, &bvh, &WideParams { width, kernel: Kernel::Scalar, ..WideParams::default() });
+            let tree = WideBvh::build(
+                &scene.spheres,
+                &bvh,
+                &WideParams { width, kernel: Kernel::Scalar, ..WideParams::default() },
+            );
             for kernel in [Kernel::Scalar, Kernel::Avx2].into_iter().filter(|k| k.is_available()) {
                 let tree = tree.clone().with_kernel(kernel).expect("available");
                 let id = BenchmarkId::new(format!("wide-bvh/w{width}/b8/{}", kernel.name()), n);

@@ -161,7 +161,8 @@ mod tests {
 
     #[test]
     fn rayon_bands_run_in_the_callers_pool_when_it_has_the_threads() {
-        let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).thread_name(|i| format!("setup-{i}")).build().unwrap();
+        let pool =
+            |n| rayon::ThreadPoolBuilder::new().num_threads(n).thread_name(|i| format!("setup-{i}")).build().unwrap();
         let strategy = Strategy::new(StrategyKind::RayonBands, 2);
         let inside = pool(2).install(|| row_threads(strategy));
         assert!(inside.iter().all(|n| n.starts_with("setup-")), "{inside:?}");

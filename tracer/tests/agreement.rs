@@ -8,7 +8,8 @@ use tracer::testing;
 
 fn arbitrary_spheres() -> impl Strategy<Value = Vec<Sphere>> {
     let coord = -50.0f32..50.0;
-    let sphere = (coord.clone(), coord.clone(), coord, 0.001f32..8.0).prop_map(|(x, y, z, r)| Sphere::new(Vec3::new(x, y, z), r));
+    let sphere = (coord.clone(), coord.clone(), coord, 0.001f32..8.0)
+        .prop_map(|(x, y, z, r)| Sphere::new(Vec3::new(x, y, z), r));
     prop::collection::vec(sphere, 0..160)
 }
 

@@ -39,7 +39,12 @@ fn bvh_does_far_less_work_than_the_list_on_many_spheres() {
     let scene = SceneKind::RandomSpheres.generate(5000, 3);
     let camera = scene.camera.with_resolution(32, 24);
     let list = trace_primary::<_, WorkCounters>(&camera, &List::build(&scene.spheres), &Strategy::SERIAL).1;
-    let bvh = trace_primary::<_, WorkCounters>(&camera, &FlatBvh::build(&scene.spheres, &BvhParams::default()), &Strategy::SERIAL).1;
+    let bvh = trace_primary::<_, WorkCounters>(
+        &camera,
+        &FlatBvh::build(&scene.spheres, &BvhParams::default()),
+        &Strategy::SERIAL,
+    )
+    .1;
     assert!(bvh.prim_tests * 50 < list.prim_tests, "bvh {bvh:?} vs list {list:?}");
 }
 

@@ -61,7 +61,8 @@ fn all_spheres_at_one_point() {
 
 #[test]
 fn huge_and_tiny_radii() {
-    let mut spheres: Vec<Sphere> = (0..50).map(|i| Sphere::new(Vec3::new(i as f32, 0.5, -10.0 - i as f32), 1e-5)).collect();
+    let mut spheres: Vec<Sphere> =
+        (0..50).map(|i| Sphere::new(Vec3::new(i as f32, 0.5, -10.0 - i as f32), 1e-5)).collect();
     spheres.push(Sphere::new(Vec3::ZERO, 1e6)); // contains every ray origin below
     spheres.push(Sphere::new(Vec3::new(3.0, 1e4, -2.0), 1e3));
     testing::assert_every_tree_agrees("extreme radii", &spheres, &testing::sphere_ray_mix(&spheres, 7, 400));
@@ -73,7 +74,11 @@ fn exponentially_spaced_spheres_stay_within_the_traversal_stack() {
     let spheres: Vec<Sphere> = (0..120).map(|i| Sphere::new(Vec3::new(1.3f32.powi(i), 0.0, 0.0), 0.01)).collect();
     for split in Split::ALL {
         for kind in [AccelKind::Bvh, AccelKind::FlatBvh] {
-            let params = AccelParams { kind, bvh: BvhParams { split, leaf_size: 1, ..BvhParams::default() }, ..AccelParams::default() };
+            let params = AccelParams {
+                kind,
+                bvh: BvhParams { split, leaf_size: 1, ..BvhParams::default() },
+                ..AccelParams::default()
+            };
             let depth = BuiltAccel::build(&spheres, &params).stats().depth;
             assert!(depth < tracer::accel::bvh::builder::MAX_DEPTH, "{split:?}: depth {depth}");
         }

@@ -63,9 +63,11 @@ fn every_strategy_and_thread_count_gives_the_same_image_and_counters() {
             assert_eq!(counters, ref_counters, "{kind:?} {strategy}");
         }
         let camera = scene.camera;
-        let (hits, _) = trace_primary::<_, WorkCounters>(&camera, &tracer::accel::List::build(&scene.spheres), &Strategy::SERIAL);
+        let (hits, _) =
+            trace_primary::<_, WorkCounters>(&camera, &tracer::accel::List::build(&scene.spheres), &Strategy::SERIAL);
         for strategy in strategies() {
-            let (h, _) = trace_primary::<_, WorkCounters>(&camera, &tracer::accel::List::build(&scene.spheres), &strategy);
+            let (h, _) =
+                trace_primary::<_, WorkCounters>(&camera, &tracer::accel::List::build(&scene.spheres), &strategy);
             assert_eq!(h.hash(), hits.hash(), "{strategy}");
         }
     }
@@ -79,7 +81,11 @@ fn every_accelerator_renders_the_same_image() {
     for kind in [AccelKind::Bvh, AccelKind::FlatBvh] {
         for split in Split::ALL {
             for traversal in Traversal::ALL {
-                let params = AccelParams { kind, bvh: BvhParams { split, traversal, ..BvhParams::default() }, ..AccelParams::default() };
+                let params = AccelParams {
+                    kind,
+                    bvh: BvhParams { split, traversal, ..BvhParams::default() },
+                    ..AccelParams::default()
+                };
                 let (image, _) = BuiltAccel::build(&scene.spheres, &params).visit(Render(&scene, Strategy::SERIAL));
                 assert_eq!(image.hash(), reference.hash(), "{params:?}");
             }

@@ -35,7 +35,10 @@ fn ray_sets_are_deterministic_and_sized_by_primary_hits() {
             assert_eq!(a, RaySet::generate(k, &s, &reference, 1));
             assert_eq!(a.rays.len(), hits, "{k:?}: one ray per primary hit");
         }
-        assert_ne!(RaySet::generate(RayKind::Diffuse, &s, &reference, 1), RaySet::generate(RayKind::Diffuse, &s, &reference, 2));
+        assert_ne!(
+            RaySet::generate(RayKind::Diffuse, &s, &reference, 1),
+            RaySet::generate(RayKind::Diffuse, &s, &reference, 2)
+        );
     }
 }
 
@@ -50,7 +53,11 @@ fn every_tree_and_strategy_answers_ray_sets_like_brute_force() {
             let (want, counters) = trace::<_, WorkCounters>(&list, &set, &Strategy::SERIAL);
             assert_eq!(counters.rays as usize, set.rays.len());
             let flat = BuiltAccel::build(&s.spheres, &AccelParams::default());
-            for strategy in [Strategy::SERIAL, Strategy::new(StrategyKind::RayonBands, 3), Strategy::new(StrategyKind::MpscThreads, 2)] {
+            for strategy in [
+                Strategy::SERIAL,
+                Strategy::new(StrategyKind::RayonBands, 3),
+                Strategy::new(StrategyKind::MpscThreads, 2),
+            ] {
                 assert_eq!(flat.visit(Trace(&set, strategy)).hash(), want.hash(), "{kind:?} {k:?} {strategy}");
             }
         }

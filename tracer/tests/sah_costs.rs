@@ -18,12 +18,23 @@ fn dearer_node_visits_build_bigger_leaves_that_still_agree_with_brute_force() {
     for split in [Split::BinnedSah, Split::SweepSah] {
         let mut leaves = Vec::new();
         for (traversal, intersection) in [(0.5, 1.0), (1.0, 1.0), (4.0, 1.0), (1.0, 0.25)] {
-            let params = AccelParams { kind: AccelKind::FlatBvh, bvh: params(split, traversal, intersection), ..AccelParams::default() };
+            let params = AccelParams {
+                kind: AccelKind::FlatBvh,
+                bvh: params(split, traversal, intersection),
+                ..AccelParams::default()
+            };
             let tree = BuiltAccel::build(&scene.spheres, &params);
-            reference.assert_built_agrees(&format!("{} costs {traversal}/{intersection}", split.name()), &tree, Tolerance::RelativeToT);
+            reference.assert_built_agrees(
+                &format!("{} costs {traversal}/{intersection}", split.name()),
+                &tree,
+                Tolerance::RelativeToT,
+            );
             leaves.push(tree.stats().leaves);
         }
-        assert!(leaves[0] > leaves[1] && leaves[1] > leaves[2], "{split:?}: leaves {leaves:?} shrink as visits get dearer");
+        assert!(
+            leaves[0] > leaves[1] && leaves[1] > leaves[2],
+            "{split:?}: leaves {leaves:?} shrink as visits get dearer"
+        );
         assert_eq!(leaves[2], leaves[3], "{split:?}: only the ratio of the costs matters: {leaves:?}");
     }
 }
@@ -32,7 +43,13 @@ fn dearer_node_visits_build_bigger_leaves_that_still_agree_with_brute_force() {
 fn midpoint_and_median_ignore_the_costs() {
     let scene = SceneKind::ClusteredSpheres.generate(2000, 3);
     for split in [Split::CentroidMidpoint, Split::ObjectMedian] {
-        let build = |t| BuiltAccel::build(&scene.spheres, &AccelParams { kind: AccelKind::FlatBvh, bvh: params(split, t, 1.0), ..AccelParams::default() }).stats();
+        let build = |t| {
+            BuiltAccel::build(
+                &scene.spheres,
+                &AccelParams { kind: AccelKind::FlatBvh, bvh: params(split, t, 1.0), ..AccelParams::default() },
+            )
+            .stats()
+        };
         assert_eq!(build(1.0), build(8.0), "{split:?}");
     }
 }

@@ -192,7 +192,8 @@ fn auto_runs_the_kernel_measured_fastest_for_its_leaf_block() {
     let simd = |name: &str| Kernel::available().iter().any(|k| k.name() == name);
     for (leaf_block, want) in [(4, "avx2"), (8, "avx2"), (16, "avx512")] {
         let wide = WideParams { leaf_block, ..WideParams::default() };
-        let tree = BuiltAccel::build(&spheres, &AccelParams { kind: AccelKind::WideBvh, wide, ..AccelParams::default() });
+        let tree =
+            BuiltAccel::build(&spheres, &AccelParams { kind: AccelKind::WideBvh, wide, ..AccelParams::default() });
         // The widest kernel where it is measured fastest; AVX2 where the AVX-512 kernel is not; scalar without either.
         let ran = [want, "avx2", "scalar"].into_iter().find(|k| simd(k)).unwrap();
         assert_eq!(tree.kernel_name(), Some(ran), "blocks of {leaf_block}");

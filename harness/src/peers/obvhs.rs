@@ -14,10 +14,10 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::ray::{Ray as ObvhsRay, RayHit};
 use schema::ObvhsQuality;
+use tracer::Vec3;
 use tracer::accel::bvh::sah;
 use tracer::accel::{Accelerator, Hit, TreeStats};
 use tracer::counters::Counters;
-use tracer::Vec3;
 use tracer::geometry::{Ray, Sphere};
 
 /// The build parameters of an obvhs preset (`BvhBuildParams::*_build()`; `pre_split` only applies to triangles).
@@ -231,7 +231,11 @@ mod tests {
             let reference = Reference::new(&scene.spheres, &scene.rays);
             for quality in [ObvhsQuality::Fastest, ObvhsQuality::Medium, ObvhsQuality::VerySlow] {
                 let accel = build(&scene.spheres, quality);
-                reference.assert_agrees(&format!("{name} {} {}", quality.name(), scene.label), &accel, Tolerance::Exact);
+                reference.assert_agrees(
+                    &format!("{name} {} {}", quality.name(), scene.label),
+                    &accel,
+                    Tolerance::Exact,
+                );
             }
         }
     }
@@ -255,7 +259,10 @@ mod tests {
             // A ray from outside straight at the center: the first sphere hit must be a real one at that t.
             let origin = s.center + Vec3::new(0.0, 0.0, 100.0);
             let ray = Ray::new(origin, (s.center - origin).normalize());
-            for hit in [bvh2.intersect(&ray, &mut tracer::counters::NoCounters), cw.intersect(&ray, &mut tracer::counters::NoCounters)] {
+            for hit in [
+                bvh2.intersect(&ray, &mut tracer::counters::NoCounters),
+                cw.intersect(&ray, &mut tracer::counters::NoCounters),
+            ] {
                 let hit = hit.unwrap_or_else(|| panic!("ray at sphere {i} missed"));
                 assert_eq!(spheres[hit.prim as usize].intersect(&ray, f32::INFINITY), Some(hit.t));
             }

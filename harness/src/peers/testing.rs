@@ -10,7 +10,9 @@ use super::embree::{EmbreeConfig, EmbreeDevice, EmbreeLibrary};
 pub fn embree_device(test: &str) -> Option<EmbreeDevice> {
     let required = std::env::var("BVHLAB_REQUIRE_EMBREE").is_ok_and(|v| v == "1");
     match EmbreeLibrary::shared() {
-        Ok(_) => Some(EmbreeDevice::new(&EmbreeConfig { threads: Some(2), ..EmbreeConfig::default() }).expect("Embree device")),
+        Ok(_) => Some(
+            EmbreeDevice::new(&EmbreeConfig { threads: Some(2), ..EmbreeConfig::default() }).expect("Embree device"),
+        ),
         Err(e) if required => panic!("{test}: BVHLAB_REQUIRE_EMBREE=1 but {e}"),
         Err(e) => {
             // Straight to stderr, past libtest's output capture, so the skip is always visible.

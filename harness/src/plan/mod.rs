@@ -197,7 +197,12 @@ impl Plan {
                     if threads > cores {
                         above_cores.push(threads);
                     }
-                    configurations.push(Configuration { id, series: s.label.clone(), settings, threads: configured.threads });
+                    configurations.push(Configuration {
+                        id,
+                        series: s.label.clone(),
+                        settings,
+                        threads: configured.threads,
+                    });
                 }
             }
         }
@@ -207,7 +212,10 @@ impl Plan {
         let mut notes = Vec::new();
         if let Some(note) = skip_unavailable_kernels(&mut configurations) {
             if configurations.is_empty() {
-                return Err(Error::Input(format!("{file}: {}: {note} Nothing is left to run.", Axis::simd_kernel.key())));
+                return Err(Error::Input(format!(
+                    "{file}: {}: {note} Nothing is left to run.",
+                    Axis::simd_kernel.key()
+                )));
             }
             notes.push(note);
         }

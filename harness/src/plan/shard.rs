@@ -12,7 +12,15 @@ use super::{Configuration, Plan, estimate_seconds};
 
 /// The settings that make a cell (see the module docs).
 fn cell_key(s: &Settings) -> (String, u64, u64, String, u32, u32, u32) {
-    (schema::Named::name(s.scene).to_string(), s.objects, s.seed, schema::Named::name(s.workload).to_string(), s.width, s.height, s.max_depth)
+    (
+        schema::Named::name(s.scene).to_string(),
+        s.objects,
+        s.seed,
+        schema::Named::name(s.workload).to_string(),
+        s.width,
+        s.height,
+        s.max_depth,
+    )
 }
 
 /// The cell of each configuration, numbered in order of first appearance; and the number of cells.
@@ -115,7 +123,8 @@ mod tests {
         let (mut a, mut b) = (plan(2), plan(64));
         a.keep_shard(2, 3);
         b.keep_shard(2, 3);
-        let ids = |p: &Plan| p.runs.iter().map(|r| (p.configurations[r.config].id.clone(), r.repetition)).collect::<Vec<_>>();
+        let ids =
+            |p: &Plan| p.runs.iter().map(|r| (p.configurations[r.config].id.clone(), r.repetition)).collect::<Vec<_>>();
         assert_eq!(ids(&a), ids(&b));
         let full = plan(2);
         let kept: Vec<_> = full.runs.iter().filter(|r| a.runs.contains(r)).copied().collect();

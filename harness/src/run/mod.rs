@@ -108,7 +108,11 @@ fn open_log(exp: &Experiment, dir: &Path, existing: Existing) -> Result<(RowLog,
             }
             Existing::MoveAside => {
                 let to = move_aside(dir)?;
-                note!("{}: the earlier run's rows moved to {} (--force replaces them instead)", dir.display(), to.display());
+                note!(
+                    "{}: the earlier run's rows moved to {} (--force replaces them instead)",
+                    dir.display(),
+                    to.display()
+                );
             }
             Existing::Replace => {}
         }

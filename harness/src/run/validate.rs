@@ -20,7 +20,6 @@
 //! `both`). Validation passes (`exact`) when `mismatches` is 0. More disagreements than one sample's worth
 //! are arbitrated on an evenly strided sample of that size; the rest count as mismatches.
 
-
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -32,8 +31,8 @@ use tracer::geometry::Ray;
 use tracer::rays::{RayAnswers, RayKind, RaySet, trace};
 use tracer::render::PrimaryHits;
 
-use super::measure::make_scene;
 use super::arbitrate::{Exact64, RayCandidates, Verdict};
+use super::measure::make_scene;
 use tracer::scene::Scene;
 
 /// Largest scene validated against brute force.

@@ -183,7 +183,13 @@ mod tests {
     #[test]
     fn a_worker_sets_up_once_per_configuration_and_answers_every_request() {
         let settings = |objects| {
-            let s = Settings { objects, width: 16, height: 12, workload: schema::Workload::Rays(tracer::rays::RayKind::Primary), ..Settings::default() };
+            let s = Settings {
+                objects,
+                width: 16,
+                height: 12,
+                workload: schema::Workload::Rays(tracer::rays::RayKind::Primary),
+                ..Settings::default()
+            };
             WorkerRequest { settings: s.normalized(), sphere_file: None }
         };
         let (a, b) = (settings(50), settings(60));

@@ -76,7 +76,10 @@ mod tests {
         let env = [("JOB_COMPLETION_INDEX", "1")];
         assert_eq!(resolve(ShardArg::Env(Some(4)), vars(&env)).unwrap(), (2, 4));
         let e = resolve(ShardArg::Env(None), vars(&env)).unwrap_err();
-        assert!(e.to_string().starts_with("--shard env: SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT are not set"), "{e}");
+        assert!(
+            e.to_string().starts_with("--shard env: SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT are not set"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -84,7 +87,11 @@ mod tests {
         for (arg, env, want) in [
             (ShardArg::Env(Some(2)), &[][..], "neither SLURM_ARRAY_TASK_ID nor JOB_COMPLETION_INDEX is set"),
             (ShardArg::Env(None), &[("SLURM_ARRAY_TASK_ID", "1")][..], "SLURM_ARRAY_TASK_COUNT are not set"),
-            (ShardArg::Env(Some(2)), &[("JOB_COMPLETION_INDEX", "x")][..], "JOB_COMPLETION_INDEX=\"x\" is not a number"),
+            (
+                ShardArg::Env(Some(2)),
+                &[("JOB_COMPLETION_INDEX", "x")][..],
+                "JOB_COMPLETION_INDEX=\"x\" is not a number",
+            ),
             (ShardArg::Env(Some(2)), &[("JOB_COMPLETION_INDEX", "2")][..], "task index 2 is out of range for 2 shards"),
         ] {
             let e = resolve(arg, vars(env)).unwrap_err();

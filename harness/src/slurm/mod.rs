@@ -65,8 +65,10 @@ pub struct Jobs {
 
 /// Reads `path` as JSON of `T`; errors name the file.
 pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, Error> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Input(format!("{}: cannot read: {e}", path.display())))?;
-    serde_json::from_str(&text).map_err(|e| Error::Input(format!("{}: not a file this harness wrote: {e}", path.display())))
+    let text =
+        std::fs::read_to_string(path).map_err(|e| Error::Input(format!("{}: cannot read: {e}", path.display())))?;
+    serde_json::from_str(&text)
+        .map_err(|e| Error::Input(format!("{}: not a file this harness wrote: {e}", path.display())))
 }
 
 /// Writes `value` as pretty JSON to `path`.

@@ -41,7 +41,11 @@ pub struct JobOptions {
 /// `text` quoted for bash (single quotes unless it is plainly safe).
 pub fn quote(text: &str) -> String {
     let safe = |c: char| c.is_ascii_alphanumeric() || "/._-+=:,@%".contains(c);
-    if !text.is_empty() && text.chars().all(safe) { text.to_string() } else { format!("'{}'", text.replace('\'', "'\\''")) }
+    if !text.is_empty() && text.chars().all(safe) {
+        text.to_string()
+    } else {
+        format!("'{}'", text.replace('\'', "'\\''"))
+    }
 }
 
 fn path(p: &Path) -> String {
@@ -78,8 +82,13 @@ pub fn array_script(o: &JobOptions, tasks: &[usize]) -> String {
     let n = o.shards;
     let mut s = String::from("#!/bin/bash\n");
     let quick = if o.quick { " (quick)" } else { "" };
-    let _ = writeln!(s, "# bvhlab: experiment {}{quick} in {n} shards, written by `harness slurm submit`.", o.experiment);
-    let _ = writeln!(s, "# Array task a runs shard a+1 of {n} into RUN_DIR/shard-<a+1>-of-{n}/; config hash {}.", o.config_hash);
+    let _ =
+        writeln!(s, "# bvhlab: experiment {}{quick} in {n} shards, written by `harness slurm submit`.", o.experiment);
+    let _ = writeln!(
+        s,
+        "# Array task a runs shard a+1 of {n} into RUN_DIR/shard-<a+1>-of-{n}/; config hash {}.",
+        o.config_hash
+    );
     let _ = writeln!(s, "#SBATCH --job-name={}", quote(&format!("bvhlab-{}", o.experiment)));
     let _ = writeln!(s, "#SBATCH --array={}", array_spec(tasks, o.max_parallel));
     s.push_str("#SBATCH --ntasks=1\n");
@@ -108,7 +117,11 @@ pub fn array_script(o: &JobOptions, tasks: &[usize]) -> String {
 /// The merge job, run once the array job `array_id` has ended in any state.
 pub fn merge_script(o: &JobOptions, array_id: &str) -> String {
     let mut s = String::from("#!/bin/bash\n");
-    let _ = writeln!(s, "# bvhlab: merge the {} shards of experiment {} once array job {array_id} has ended.", o.shards, o.experiment);
+    let _ = writeln!(
+        s,
+        "# bvhlab: merge the {} shards of experiment {} once array job {array_id} has ended.",
+        o.shards, o.experiment
+    );
     let _ = writeln!(s, "#SBATCH --job-name={}", quote(&format!("bvhlab-{}-merge", o.experiment)));
     let _ = writeln!(s, "#SBATCH --dependency=afterany:{array_id}");
     s.push_str("#SBATCH --ntasks=1\n#SBATCH --cpus-per-task=1\n");

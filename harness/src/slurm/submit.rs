@@ -34,12 +34,9 @@ fn cpus_per_task(plan: &Plan) -> usize {
 
 /// Runs `sbatch --parsable [extra] script` and returns the job id it prints.
 fn sbatch(script: &Path, extra: &[String]) -> Result<String, Error> {
-    let out = Command::new("sbatch")
-        .arg("--parsable")
-        .args(extra)
-        .arg(script)
-        .output()
-        .map_err(|e| Error::Input(format!("sbatch: cannot run it ({e}): is Slurm installed here? (--dry-run prints the scripts)")))?;
+    let out = Command::new("sbatch").arg("--parsable").args(extra).arg(script).output().map_err(|e| {
+        Error::Input(format!("sbatch: cannot run it ({e}): is Slurm installed here? (--dry-run prints the scripts)"))
+    })?;
     let stdout = String::from_utf8_lossy(&out.stdout);
     if !out.status.success() {
         let why = String::from_utf8_lossy(&out.stderr).trim().replace('\n', " ");
@@ -105,7 +102,8 @@ pub fn submit(args: &SubmitArgs) -> Result<(), Error> {
             run_dir.display()
         )));
     }
-    let harness = std::env::current_exe().map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
+    let harness =
+        std::env::current_exe().map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
     let options = JobOptions {
         experiment: exp.name.clone(),
         config: absolute(&args.config)?,
@@ -182,7 +180,11 @@ pub fn resubmit(run_dir: &Path, dry_run: bool) -> Result<(), Error> {
         }
     }
     if tasks.is_empty() {
-        say!("all {} shards are complete: nothing to resubmit (merge with `harness merge {}`)", o.shards, run_dir.display());
+        say!(
+            "all {} shards are complete: nothing to resubmit (merge with `harness merge {}`)",
+            o.shards,
+            run_dir.display()
+        );
         return Ok(());
     }
     if dry_run {
@@ -190,7 +192,11 @@ pub fn resubmit(run_dir: &Path, dry_run: bool) -> Result<(), Error> {
         return Ok(());
     }
     let s = launch(o, &tasks, jobs.submissions.clone())?;
-    say!("array job {} (shards {})", s.array_job_id, tasks.iter().map(|t| (t + 1).to_string()).collect::<Vec<_>>().join(", "));
+    say!(
+        "array job {} (shards {})",
+        s.array_job_id,
+        tasks.iter().map(|t| (t + 1).to_string()).collect::<Vec<_>>().join(", ")
+    );
     say!("merge job {} (after the array ends)", s.merge_job_id);
     Ok(())
 }

@@ -46,6 +46,9 @@ mod tests {
         assert_eq!(answers, RayAnswers::Closest(vec![PrimaryHits::MISS; 1200]));
         assert_eq!((c.rays, c.nodes_visited, c.box_tests, c.prim_tests), (1200, 0, 0, 0));
         let shadow = RaySet { kind: crate::rays::RayKind::Shadow, rays: set.rays.clone() };
-        assert_eq!(trace::<_, WorkCounters>(&Null, &shadow, &Strategy::SERIAL).0, RayAnswers::Occluded(vec![false; 1200]));
+        assert_eq!(
+            trace::<_, WorkCounters>(&Null, &shadow, &Strategy::SERIAL).0,
+            RayAnswers::Occluded(vec![false; 1200])
+        );
     }
 }

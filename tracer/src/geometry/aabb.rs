@@ -89,7 +89,11 @@ impl RayBoxTester {
     pub fn new(ray: &Ray) -> Self {
         let nonzero = |d: f32| if d.abs() < 1e-30 { 1e-30f32.copysign(d) } else { d };
         let d = ray.dir;
-        Self { origin: ray.origin, inv_dir: Vec3::new(nonzero(d.x), nonzero(d.y), nonzero(d.z)).recip(), t_min: ray.t_min }
+        Self {
+            origin: ray.origin,
+            inv_dir: Vec3::new(nonzero(d.x), nonzero(d.y), nonzero(d.z)).recip(),
+            t_min: ray.t_min,
+        }
     }
 
     /// The reciprocal direction the slab tests use (zero components replaced as [`RayBoxTester::new`] says).

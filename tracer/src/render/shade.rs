@@ -78,7 +78,8 @@ impl<A: Accelerator> Shader<'_, A> {
             color += material.albedo * (n_dot_l * light.intensity);
             if material.specular > 0.0 {
                 let h = (l - ray.dir).normalize();
-                color += Vec3::splat(material.specular * normal.dot(h).max(0.0).powi(material.shininess) * light.intensity);
+                color +=
+                    Vec3::splat(material.specular * normal.dot(h).max(0.0).powi(material.shininess) * light.intensity);
             }
         }
         if material.reflectivity > 0.0 && depth < self.max_depth {

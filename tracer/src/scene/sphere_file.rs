@@ -40,7 +40,15 @@ pub struct SphereFileError {
 impl fmt::Display for SphereFileError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self.column {
-            Some(c) => write!(f, "line {}, column {} ({}): expected {}, found {:?}", self.line, c, COLUMNS[c - 1], self.expected, self.found),
+            Some(c) => write!(
+                f,
+                "line {}, column {} ({}): expected {}, found {:?}",
+                self.line,
+                c,
+                COLUMNS[c - 1],
+                self.expected,
+                self.found
+            ),
             None if self.line == 0 => write!(f, "expected {}, found {}", self.expected, self.found),
             None => write!(f, "line {}: expected {}, found {}", self.line, self.expected, self.found),
         }
@@ -49,8 +57,15 @@ impl fmt::Display for SphereFileError {
 
 impl std::error::Error for SphereFileError {}
 
-fn field(line: usize, column: usize, text: &str, expected: &str, ok: impl Fn(f64) -> bool) -> Result<f64, SphereFileError> {
-    let err = || SphereFileError { line, column: Some(column), expected: expected.to_string(), found: text.to_string() };
+fn field(
+    line: usize,
+    column: usize,
+    text: &str,
+    expected: &str,
+    ok: impl Fn(f64) -> bool,
+) -> Result<f64, SphereFileError> {
+    let err =
+        || SphereFileError { line, column: Some(column), expected: expected.to_string(), found: text.to_string() };
     let v: f64 = text.parse().map_err(|_| err())?;
     if v.is_finite() && ok(v) { Ok(v) } else { Err(err()) }
 }
@@ -61,7 +76,8 @@ fn parse_line(line: usize, text: &str) -> Result<(Sphere, Material), SphereFileE
         return Err(SphereFileError {
             line,
             column: None,
-            expected: "4, 7 or 10 comma-separated columns (x,y,z,r[,red,green,blue[,specular,shininess,reflectivity]])".into(),
+            expected: "4, 7 or 10 comma-separated columns (x,y,z,r[,red,green,blue[,specular,shininess,reflectivity]])"
+                .into(),
             found: format!("{} columns", fields.len()),
         });
     }
@@ -106,7 +122,12 @@ pub fn parse(text: &str) -> Result<Scene, SphereFileError> {
         materials.push(m);
     }
     if spheres.is_empty() {
-        return Err(SphereFileError { line: 0, column: None, expected: "at least one sphere".into(), found: "none".into() });
+        return Err(SphereFileError {
+            line: 0,
+            column: None,
+            expected: "at least one sphere".into(),
+            found: "none".into(),
+        });
     }
     Ok(framed(spheres, materials))
 }

@@ -83,7 +83,11 @@ pub fn scenes() -> Vec<TestScene> {
             for seed in [1u64, 2] {
                 let scene = kind.generate(n, seed);
                 let rays = scene_ray_mix(&scene, seed ^ 0x5eed);
-                all.push(TestScene { label: format!("{} n={n} seed={seed}", kind.name()), spheres: scene.spheres, rays });
+                all.push(TestScene {
+                    label: format!("{} n={n} seed={seed}", kind.name()),
+                    spheres: scene.spheres,
+                    rays,
+                });
             }
         }
     }

@@ -83,10 +83,7 @@ pub const fn packet_alignment(lanes: usize) -> usize {
 #[inline(always)]
 #[track_caller]
 pub fn aligned<T>(ptr: *const T, align: usize, what: &str) -> *const T {
-    assert!(
-        (ptr as usize).is_multiple_of(align),
-        "Embree needs {what} aligned to {align} bytes, got address {ptr:p}"
-    );
+    assert!((ptr as usize).is_multiple_of(align), "Embree needs {what} aligned to {align} bytes, got address {ptr:p}");
     ptr
 }
 
@@ -303,7 +300,8 @@ const _: () = assert!(std::mem::offset_of!(RTCHit16, instPrimID) == 16 * 32);
 const _: () = assert!(size_of::<RTCIntersectArguments>() == 32 && align_of::<RTCIntersectArguments>() == 8);
 const _: () = assert!(align_of::<ValidMask8>() == packet_alignment(8) && size_of::<ValidMask8>() == 32);
 const _: () = assert!(align_of::<ValidMask16>() == packet_alignment(16) && size_of::<ValidMask16>() == 64);
-const _: () = assert!(align_of::<RTCRayHit8>() == packet_alignment(8) && align_of::<RTCRayHit16>() == packet_alignment(16));
+const _: () =
+    assert!(align_of::<RTCRayHit8>() == packet_alignment(8) && align_of::<RTCRayHit16>() == packet_alignment(16));
 
 /// `RTCErrorFunction`: `void (*)(void* userPtr, RTCError code, const char* str)`.
 pub type RTCErrorFunction = unsafe extern "C" fn(user: *mut c_void, code: u32, message: *const c_char);

@@ -158,7 +158,11 @@ impl EmbreeDevice {
             let code = unsafe { (api.get_device_error)(std::ptr::null_mut()) };
             // SAFETY: as above; the message pointer is NUL-terminated or null.
             let msg = unsafe { (api.get_device_last_error_message)(std::ptr::null_mut()) };
-            let msg = if msg.is_null() { String::new() } else { unsafe { CStr::from_ptr(msg) }.to_string_lossy().into_owned() };
+            let msg = if msg.is_null() {
+                String::new()
+            } else {
+                unsafe { CStr::from_ptr(msg) }.to_string_lossy().into_owned()
+            };
             return Err(EmbreeError::Api(format!("rtcNewDevice(\"{text}\") failed: {} (code {code})", msg.trim())));
         }
         let property = |p: u32| -> isize {
@@ -190,7 +194,10 @@ impl EmbreeDevice {
         };
         let inner = DeviceInner { lib, raw, errors: Box::new(Mutex::new(None)), info };
         if !(40000..50000).contains(&v) {
-            return Err(EmbreeError::Api(format!("{} is Embree {}, not Embree 4", inner.info.path, inner.info.version)));
+            return Err(EmbreeError::Api(format!(
+                "{} is Embree {}, not Embree 4",
+                inner.info.path, inner.info.version
+            )));
         }
         let user = &*inner.errors as *const Mutex<Option<String>> as *mut c_void;
         // SAFETY: the callback matches RTCErrorFunction; `user` stays valid until the device is released.

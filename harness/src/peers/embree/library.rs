@@ -31,7 +31,10 @@ impl fmt::Display for EmbreeUnavailable {
         let tried = if self.tried.is_empty() { "nothing".to_string() } else { self.tried.join("; ") };
         // One line: loader messages may carry newlines.
         let tried = tried.replace(['\n', '\r'], " ");
-        write!(f, "Embree 4 not found (tried {tried}); install it with `{INSTALL_HINT}` or set EMBREE_LIB to a libembree4.so file")
+        write!(
+            f,
+            "Embree 4 not found (tried {tried}); install it with `{INSTALL_HINT}` or set EMBREE_LIB to a libembree4.so file"
+        )
     }
 }
 

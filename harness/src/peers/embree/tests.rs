@@ -134,7 +134,6 @@ fn site_dirs_without_the_wheel_are_listed_as_tried() {
     assert!(err.to_string().contains("embreex.libs/libembree4*.so*: none"), "{err}");
 }
 
-
 #[test]
 fn camera_hits_match_exactly_without_excuses() {
     let Some(device) = embree_device("camera_hits_match_exactly_without_excuses") else { return };
@@ -150,7 +149,8 @@ fn camera_hits_match_exactly_without_excuses() {
             let (want, _) = trace_primary::<_, NoCounters>(&camera, &ours, &Strategy::SERIAL);
             let (got, _) = trace_primary::<_, NoCounters>(&camera, &embree, &Strategy::SERIAL);
             assert_eq!(got.hit_count(), want.hit_count(), "{} n={n}", kind.name());
-            let differ = want.hits.iter().zip(&got.hits).filter(|(w, g)| (w.prim == u32::MAX) != (g.prim == u32::MAX)).count();
+            let differ =
+                want.hits.iter().zip(&got.hits).filter(|(w, g)| (w.prim == u32::MAX) != (g.prim == u32::MAX)).count();
             assert_eq!(differ, 0, "{} n={n}: pixels whose hit/miss differ", kind.name());
         }
     }
@@ -161,12 +161,22 @@ fn pinned_isa_sets_the_native_packet_width() {
     let Some(_) = embree_device("pinned_isa_sets_the_native_packet_width") else { return };
     let TestScene { spheres, rays, .. } = scene_of(50);
     let reference = Reference::new(&spheres, &rays);
-    let on_cpu = [true, true, is_x86_feature_detected!("avx"), is_x86_feature_detected!("avx2"), is_x86_feature_detected!("avx512f")];
-    for ((isa, width), on_cpu) in [("sse2", 4), ("sse4.2", 4), ("avx", 8), ("avx2", 8), ("avx512", 16)].into_iter().zip(on_cpu) {
+    let on_cpu = [
+        true,
+        true,
+        is_x86_feature_detected!("avx"),
+        is_x86_feature_detected!("avx2"),
+        is_x86_feature_detected!("avx512f"),
+    ];
+    for ((isa, width), on_cpu) in
+        [("sse2", 4), ("sse4.2", 4), ("avx", 8), ("avx2", 8), ("avx512", 16)].into_iter().zip(on_cpu)
+    {
         if !on_cpu {
             continue;
         }
-        let device = EmbreeDevice::new(&EmbreeConfig { threads: Some(1), isa: Some(isa.into()), ..EmbreeConfig::default() }).expect(isa);
+        let device =
+            EmbreeDevice::new(&EmbreeConfig { threads: Some(1), isa: Some(isa.into()), ..EmbreeConfig::default() })
+                .expect(isa);
         assert_eq!(device.info().native_packet, width, "isa={isa}: {:?}", device.info());
         let scene = EmbreeSpheres::build(&device, &spheres, EmbreeQuality::Medium).expect(isa);
         reference.assert_agrees(&format!("embree isa={isa}"), &scene, Tolerance::RelativeToScale);

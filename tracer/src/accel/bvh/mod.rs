@@ -17,6 +17,6 @@ pub mod traverse;
 
 pub use flat::FlatBvh;
 pub use params::{BvhParams, ParamError, Split, Traversal};
-pub use sah::{CostModel, SahCosts};
 pub use pointer::Bvh;
+pub use sah::{CostModel, SahCosts};
 pub use stats::TreeStats;

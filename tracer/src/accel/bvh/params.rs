@@ -129,7 +129,9 @@ impl BvhParams {
         };
         check("leaf_size", Self::LEAF_SIZES, self.leaf_size)?;
         check("sah_bins", Self::SAH_BINS, self.sah_bins)?;
-        for (key, cost) in [("sah_traversal_cost", self.sah_costs.traversal), ("sah_intersection_cost", self.sah_costs.intersection)] {
+        for (key, cost) in
+            [("sah_traversal_cost", self.sah_costs.traversal), ("sah_intersection_cost", self.sah_costs.intersection)]
+        {
             if !(Self::SAH_COSTS.contains(&cost)) {
                 let allowed = format!("{}..={}", Self::SAH_COSTS.start(), Self::SAH_COSTS.end());
                 return Err(ParamError { key, allowed, found: cost.to_string() });

@@ -165,9 +165,8 @@ impl Accelerator for Bvh {
     }
 
     fn stats(&self) -> TreeStats {
-        let bytes = std::mem::size_of::<Self>()
-            + Self::heap_bytes(&self.root)
-            + std::mem::size_of_val(self.spheres.as_slice());
+        let bytes =
+            std::mem::size_of::<Self>() + Self::heap_bytes(&self.root) + std::mem::size_of_val(self.spheres.as_slice());
         TreeStats::of_tree(self, bytes)
     }
 }

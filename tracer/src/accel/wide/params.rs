@@ -207,7 +207,10 @@ mod tests {
     #[test]
     fn serializes_in_kebab_case_and_fills_defaults() {
         let p: WideParams = serde_json::from_str(r#"{"width": 4, "kernel": "avx512", "order": "octant"}"#).unwrap();
-        assert_eq!(p, WideParams { width: 4, kernel: Kernel::Avx512, order: ChildOrdering::Octant, ..WideParams::default() });
+        assert_eq!(
+            p,
+            WideParams { width: 4, kernel: Kernel::Avx512, order: ChildOrdering::Octant, ..WideParams::default() }
+        );
         let text = serde_json::to_string(&WideParams::default()).unwrap();
         assert_eq!(text, r#"{"width":8,"leaf_block":8,"kernel":"auto","order":"distance"}"#);
         assert!(serde_json::from_str::<WideParams>(r#"{"widht": 4}"#).is_err());

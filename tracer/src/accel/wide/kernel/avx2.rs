@@ -36,7 +36,11 @@ impl Ops for Avx2 {
     #[inline(always)]
     unsafe fn boxes<const W: usize>(node: &WideNode<W>, r: &RayLanes, t_max: f32, dist: &mut [f32; W]) -> u32 {
         unsafe {
-            if W == 4 { lanes::boxes::<__m128, W>(node, r, t_max, dist) } else { lanes::boxes::<__m256, W>(node, r, t_max, dist) }
+            if W == 4 {
+                lanes::boxes::<__m128, W>(node, r, t_max, dist)
+            } else {
+                lanes::boxes::<__m256, W>(node, r, t_max, dist)
+            }
         }
     }
 
@@ -59,12 +63,18 @@ impl Ops for Avx2 {
     #[inline(always)]
     unsafe fn closest<const B: usize>(block: &Block<B>, r: &RayLanes, t_max: f32) -> Option<(f32, usize)> {
         unsafe {
-            if B == 4 { lanes::closest::<__m128, B>(block, r, t_max) } else { lanes::closest::<__m256, B>(block, r, t_max) }
+            if B == 4 {
+                lanes::closest::<__m128, B>(block, r, t_max)
+            } else {
+                lanes::closest::<__m256, B>(block, r, t_max)
+            }
         }
     }
 
     #[inline(always)]
     unsafe fn any<const B: usize>(block: &Block<B>, r: &RayLanes, t_max: f32) -> bool {
-        unsafe { if B == 4 { lanes::any::<__m128, B>(block, r, t_max) } else { lanes::any::<__m256, B>(block, r, t_max) } }
+        unsafe {
+            if B == 4 { lanes::any::<__m128, B>(block, r, t_max) } else { lanes::any::<__m256, B>(block, r, t_max) }
+        }
     }
 }

@@ -386,7 +386,8 @@ unsafe fn spheres<V: Vf, const B: usize>(block: &Block<B>, first: usize, r: &Ray
         let row = |lanes: &[f32; B]| V::load(lanes.as_ptr().add(first));
         let (cx, cy, cz, r2) = (row(&block.cx), row(&block.cy), row(&block.cz), row(&block.r2));
         let (dx, dy, dz) = (V::splat(r.dir[0]), V::splat(r.dir[1]), V::splat(r.dir[2]));
-        let (fx, fy, fz) = (V::splat(r.origin[0]).sub(cx), V::splat(r.origin[1]).sub(cy), V::splat(r.origin[2]).sub(cz));
+        let (fx, fy, fz) =
+            (V::splat(r.origin[0]).sub(cx), V::splat(r.origin[1]).sub(cy), V::splat(r.origin[2]).sub(cz));
         let a = V::splat(r.a);
         let b = fx.mul(dx).add(fy.mul(dy)).add(fz.mul(dz));
         let s = b.div(a);
