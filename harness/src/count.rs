@@ -120,8 +120,9 @@ pub fn run(request: &CountRequest<'_>) -> Result<(), Error> {
     let provenance = Provenance::collect();
     let started = Instant::now();
     let next = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<Result<[InstructionCount; 2], Error>>>> =
-        Mutex::new((0..todo.len()).map(|_| None).collect());
+    // Each configuration's build and trace counts, by position in `todo`, as the jobs finish them.
+    type Counted = Option<Result<[InstructionCount; 2], Error>>;
+    let results: Mutex<Vec<Counted>> = Mutex::new((0..todo.len()).map(|_| None).collect());
     let job = || {
         loop {
             let n = next.fetch_add(1, Ordering::SeqCst);
@@ -245,7 +246,7 @@ fn count_one(
         return Err(fail(format!("the worker failed ({}): {}", output.status, last.join(" ").trim())));
     }
     // Dumps `out.1`, `out.2`, … in the order the phases ended; `out` itself is the (empty) final dump.
-    let mut found: Vec<Option<(u64, Option<(u64, u64)>)>> = vec![None; PHASES.len()];
+    let mut found: Vec<Option<DumpTotals>> = vec![None; PHASES.len()];
     for part in 1.. {
         let path = PathBuf::from(format!("{}.{part}", out.display()));
         let Ok(text) = std::fs::read_to_string(&path) else { break };
@@ -273,9 +274,12 @@ fn count_one(
     Ok(counts)
 }
 
+/// A callgrind dump's instructions and, with a cache simulation, its (D1 misses, last-level misses).
+type DumpTotals = (u64, Option<(u64, u64)>);
+
 /// The trigger and the totals of a callgrind dump: `Ir`, and with a cache simulation D1 misses (`D1mr + D1mw`)
 /// and last-level misses (`ILmr + DLmr + DLmw`).
-fn parse_dump(text: &str) -> Result<(String, (u64, Option<(u64, u64)>)), String> {
+fn parse_dump(text: &str) -> Result<(String, DumpTotals), String> {
     let line = |key: &str| text.lines().find_map(|l| l.strip_prefix(key)).map(str::trim);
     let trigger = line("desc: Trigger:").ok_or("no trigger")?.to_string();
     let events: Vec<&str> = line("events:").ok_or("no events line")?.split_whitespace().collect();

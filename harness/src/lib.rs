@@ -155,11 +155,11 @@ fn run_command(args: &RunArgs) -> Result<(), Error> {
         slurm::write_json(&dir.join(slurm::SHARD_JSON), &info)?;
     }
     run::sweep(&exp, &plan, &dir, existing)?;
-    if let Some((i, n)) = shard {
-        if plan.runs.is_empty() {
-            say!("shard {i} of {n} is empty (the plan has fewer scene cells than shards): nothing to run");
-            return Ok(());
-        }
+    if let Some((i, n)) = shard
+        && plan.runs.is_empty()
+    {
+        say!("shard {i} of {n} is empty (the plan has fewer scene cells than shards): nothing to run");
+        return Ok(());
     }
     let failed = write_report(&dir, &exp, plan.notes.clone())?;
     if failed && args.check_claims {

@@ -475,7 +475,7 @@ pub fn num(v: f64) -> String {
         return "0".into();
     }
     let a = v.abs();
-    if a < 1e-4 || a >= 1e9 {
+    if !(1e-4..1e9).contains(&a) {
         return format!("{v:.3e}");
     }
     let decimals = (3 - a.log10().floor() as i32).max(0) as usize;

@@ -79,9 +79,12 @@ pub struct Curve {
     pub points: Vec<Point>,
 }
 
+/// One curve's runs: the settings held fixed (as [`Curve::fixed`]) and its runs grouped by x value.
+pub(crate) type CurveRuns<'a> = (String, Vec<(f64, Vec<&'a Run>)>);
+
 /// The runs of `series` split into curves (see [`Curve`]), each grouped by x value (ascending).
 /// Runs without a numeric x are left out.
-pub(crate) fn curves_of<'a>(runs: &'a [Run], series: &str, x: &str) -> Vec<(String, Vec<(f64, Vec<&'a Run>)>)> {
+pub(crate) fn curves_of<'a>(runs: &'a [Run], series: &str, x: &str) -> Vec<CurveRuns<'a>> {
     let own: Vec<&Run> = runs.iter().filter(|r| r.series() == series && r.num(x).is_finite()).collect();
     let varying: Vec<&str> = POINT
         .iter()
@@ -89,7 +92,7 @@ pub(crate) fn curves_of<'a>(runs: &'a [Run], series: &str, x: &str) -> Vec<(Stri
         .filter(|c| *c != "seed" && *c != x)
         .filter(|c| own.iter().any(|r| r.text(c) != own[0].text(c)))
         .collect();
-    let mut curves: Vec<(String, Vec<(f64, Vec<&Run>)>)> = Vec::new();
+    let mut curves: Vec<CurveRuns> = Vec::new();
     for run in own {
         let fixed = varying.iter().map(|c| format!("{c} {}", run.text(c))).collect::<Vec<_>>().join(", ");
         let index = match curves.iter().position(|(f, _)| *f == fixed) {

@@ -145,7 +145,7 @@ fn golden_report() {
     assert_eq!(value(&summary, bvh10, "speedup"), 1.25 / 0.3125);
     assert_eq!(value(&summary, bvh100, "speedup"), 11.0 / 2.5);
     let (lo, hi) = (value(&summary, bvh100, "speedup_lo"), value(&summary, bvh100, "speedup_hi"));
-    assert!(10.0 / 3.0 <= lo && lo <= 11.0 / 2.5 && 11.0 / 2.5 <= hi && hi <= 12.0 / 2.0, "[{lo}, {hi}]");
+    assert!((10.0 / 3.0..=11.0 / 2.5).contains(&lo) && (11.0 / 2.5..=12.0 / 2.0).contains(&hi), "[{lo}, {hi}]");
 
     // Claims.
     let verdicts: Vec<Verdict> = outcome.claims.iter().map(|c| c.verdict).collect();

@@ -121,12 +121,15 @@ impl EmbreeIsa {
     }
 }
 
+// `named_enum!` declares the variants; the defaults are chosen here rather than with `#[default]` inside it.
+#[allow(clippy::derivable_impls)]
 impl Default for ObvhsQuality {
     fn default() -> Self {
         ObvhsQuality::Medium
     }
 }
 
+#[allow(clippy::derivable_impls)]
 impl Default for EmbreeQuality {
     fn default() -> Self {
         EmbreeQuality::Medium

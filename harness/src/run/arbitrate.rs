@@ -143,6 +143,7 @@ impl ChunkBox {
             + (self.half[0] * self.half[0] + self.half[1] * self.half[1] + self.half[2] * self.half[2]).sqrt();
         let widen = 2.0 * self.r_max + (32.0 * U_F32 + 1e-9) * far;
         let (mut enter, mut exit) = (f64::NEG_INFINITY, f64::INFINITY);
+        #[allow(clippy::needless_range_loop)] // k indexes five per-axis arrays alike
         for k in 0..3 {
             let (lo, hi) = (-self.half[k] - widen - rel[k], self.half[k] + widen - rel[k]);
             if s.n[k] == 0.0 {

@@ -175,18 +175,29 @@ fn check(plan: &Plan, c: &Configuration, bank: &mut RayBank) -> Result<Checked, 
     })
 }
 
-/// The row of one timed repetition (or of a configuration that failed validation, with NaN timings).
-fn row(
-    exp: &Experiment,
-    c: &Configuration,
-    rep: u32,
-    t: &Timing,
-    v: &Checked,
-    p: &Provenance,
+/// What every row of one sweep shares: the experiment, where and how it was recorded, and its shard.
+struct Recording<'a> {
+    exp: &'a Experiment,
+    provenance: &'a Provenance,
+    shard: Option<(usize, usize)>,
+}
+
+/// When a run started: the 1-minute load average just before it and its RFC 3339 time.
+struct Started {
     load: f64,
     timestamp: String,
-    shard: Option<(usize, usize)>,
-) -> Row {
+}
+
+impl Started {
+    fn now() -> Self {
+        Started { load: load_average_1m(), timestamp: timestamp_now() }
+    }
+}
+
+/// The row of one timed repetition (or of a configuration that failed validation, with NaN timings).
+fn row(r: &Recording, c: &Configuration, rep: u32, t: &Timing, v: &Checked, started: Started) -> Row {
+    let (exp, p, shard) = (r.exp, r.provenance, r.shard);
+    let Started { load, timestamp } = started;
     let w = &v.counters;
     let (nodes, boxes, prims) = w.per_ray();
     let mut row = Row::of(&c.settings);
@@ -264,6 +275,7 @@ fn row(
 /// configuration's remaining repetitions are skipped once its median is known well enough ([`adaptive`]).
 pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, existing: Existing) -> Result<(), Error> {
     let provenance = Provenance::collect();
+    let recording = Recording { exp, provenance: &provenance, shard: plan.shard };
     let (mut log, recorded) = open_log(exp, dir, existing)?;
     let metric_of = |c: &Configuration| {
         report::spec::speedup_metric(exp.speedup_metric.as_deref(), schema::Named::name(c.settings.workload))
@@ -320,7 +332,7 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, existing: Existing) -> R
         if failed.contains(&run.config) || sampler.is_done(run.config) {
             continue;
         }
-        if !checked.contains_key(&run.config) {
+        if let std::collections::hash_map::Entry::Vacant(e) = checked.entry(run.config) {
             let started = std::time::Instant::now();
             let v = check(plan, c, &mut bank)?;
             progress.validated(run.config, started.elapsed().as_secs_f64());
@@ -340,8 +352,7 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, existing: Existing) -> R
                     }
                 );
                 let untimed = Timing::untimed(v.output_hash);
-                let mut failed_row =
-                    row(exp, c, 0, &untimed, &v, &provenance, load_average_1m(), timestamp_now(), plan.shard);
+                let mut failed_row = row(&recording, c, 0, &untimed, &v, Started::now());
                 failed_row.repetition_rule = rule_of(c);
                 log.append(&failed_row)
                     .map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))?;
@@ -351,21 +362,20 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, existing: Existing) -> R
                 progress.update(|config| pending.get(&config).map_or(0.0, |p| p.expected(&sampler, config)));
                 continue;
             }
-            checked.insert(run.config, v);
+            e.insert(v);
         }
-        let load = load_average_1m();
-        let ts = timestamp_now();
+        let started_run = Started::now();
         let started = std::time::Instant::now();
         let timing = if c.settings.peer().is_some_and(PeerKind::needs_embree) {
-            if !workers.contains_key(&run.config) {
+            if let std::collections::hash_map::Entry::Vacant(e) = workers.entry(run.config) {
                 let exe = std::env::current_exe()
                     .map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
-                workers.insert(run.config, Worker::start(&exe, None)?);
+                e.insert(Worker::start(&exe, None)?);
             }
             workers.get_mut(&run.config).expect("started above").time(&worker_request(plan, c))?
         } else {
-            if !setups.contains_key(&run.config) {
-                setups.insert(run.config, Setup::start(&c.settings)?);
+            if let std::collections::hash_map::Entry::Vacant(e) = setups.entry(run.config) {
+                e.insert(Setup::start(&c.settings)?);
             }
             let rays = workload_rays(plan, &c.settings, &mut bank);
             measure::timed(&c.settings, plan.scene_file(), rays.as_deref(), &setups[&run.config])?
@@ -388,7 +398,7 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, existing: Existing) -> R
                         timing.output_hash
                     )));
                 }
-                let mut recorded = row(exp, c, rep, &timing, v, &provenance, load, ts, plan.shard);
+                let mut recorded = row(&recording, c, rep, &timing, v, started_run);
                 recorded.repetition_rule = rule_of(c);
                 recorded.interval_width =
                     sampler.record(run.config, &c.id, adaptive::timed_value(&timing, metric_of(c)));
@@ -446,17 +456,10 @@ mod tests {
             wrong_side: "backend",
             rays: 786_432,
         };
-        let row = row(
-            &exp,
-            &plan.configurations[0],
-            0,
-            &Timing::untimed(1),
-            &v,
-            &Provenance::collect(),
-            0.5,
-            "t".into(),
-            None,
-        );
+        let provenance = Provenance::collect();
+        let recording = Recording { exp: &exp, provenance: &provenance, shard: None };
+        let started = Started { load: 0.5, timestamp: "t".into() };
+        let row = row(&recording, &plan.configurations[0], 0, &Timing::untimed(1), &v, started);
         assert_eq!((row.validation.as_str(), row.mismatches), ("FAILED", 3));
         assert_eq!((row.grazing, row.reference_checked, row.wrong_side.as_str()), (2, 16_384, "backend"));
         let text = format!("{}\n{}", schema::row::header(), schema::row::csv_line(&row).unwrap());

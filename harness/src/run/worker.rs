@@ -110,19 +110,19 @@ impl Worker {
 
     fn send(&mut self, request: &WorkerRequest) {
         let json = serde_json::to_string(request).expect("settings serialize");
-        if let Some(stdin) = self.stdin.as_mut() {
-            if writeln!(stdin, "{json}").and_then(|()| stdin.flush()).is_err() {
-                self.stdin = None; // the worker is gone: `receive` says why
-            }
+        if let Some(stdin) = self.stdin.as_mut()
+            && writeln!(stdin, "{json}").and_then(|()| stdin.flush()).is_err()
+        {
+            self.stdin = None; // the worker is gone: `receive` says why
         }
     }
 
     fn receive(&mut self) -> Result<Timing, Error> {
         let mut answer = String::new();
-        if self.stdout.read_line(&mut answer).is_ok() {
-            if let Ok(t) = serde_json::from_str::<Timing>(answer.trim()) {
-                return Ok(t);
-            }
+        if self.stdout.read_line(&mut answer).is_ok()
+            && let Ok(t) = serde_json::from_str::<Timing>(answer.trim())
+        {
+            return Ok(t);
         }
         Err(self.failure())
     }

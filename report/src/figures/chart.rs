@@ -275,7 +275,7 @@ pub fn tick(v: f64) -> String {
     if a == 0.0 {
         return "0".into();
     }
-    if a >= 1e7 || a < 1e-3 {
+    if !(1e-3..1e7).contains(&a) {
         return format!("{v:.1e}").replace(".0e", "e");
     }
     let decimals = (3 - a.log10().floor() as i32).max(0) as usize;

@@ -57,12 +57,14 @@ pub trait Accelerator: Send + Sync {
 /// Which acceleration structure to build.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
+#[derive(Default)]
 pub enum AccelKind {
     /// Brute force over every sphere.
     List,
     /// The paper's pointer-based tree of boxed nodes.
     Bvh,
     /// The same tree in one contiguous array.
+    #[default]
     FlatBvh,
     /// The tree collapsed into 4- or 8-wide nodes with SIMD sphere leaves ([`WideBvh`]).
     WideBvh,
@@ -94,12 +96,6 @@ pub struct AccelParams {
     /// with it when missing, so the other kinds' serialized parameters are what they were before it existed.
     #[serde(default, skip_serializing_if = "WideParams::is_default")]
     pub wide: WideParams,
-}
-
-impl Default for AccelKind {
-    fn default() -> Self {
-        AccelKind::FlatBvh
-    }
 }
 
 /// A built accelerator of any kind.

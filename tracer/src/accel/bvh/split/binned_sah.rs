@@ -151,8 +151,9 @@ fn best_plane(
             break;
         }
         let key = costs.split_key(left.surface_area_of_nonempty(), left_count, right_area[b], right_count);
+        // Only a key strictly below the best is evaluated further (a NaN key never is).
         if let Some(c) = best
-            && !(key < c.key)
+            && key.partial_cmp(&c.key) != Some(std::cmp::Ordering::Less)
         {
             continue;
         }
