@@ -8,12 +8,14 @@
 //! - [`value`]: how one setting value is parsed from a config and written to a row ([`AxisType`]);
 //! - [`columns`]: the declaration itself: [`Settings`], [`Axis`], [`AxisValue`] and [`Row`];
 //! - [`row`]: columns as metadata, cells, configuration ids and the CSV row log format;
-//! - [`rows_md`]: `report/ROWS.md`, generated from the declaration.
+//! - [`rows_md`]: `report/ROWS.md`, generated from the declaration;
+//! - [`config_md`]: `docs/configuration.md`, the configuration reference, generated from it too.
 
 #[macro_use]
 mod declare;
 pub mod applicability;
 pub mod columns;
+pub mod config_md;
 pub mod names;
 pub mod row;
 pub mod rows_md;

@@ -1,0 +1,73 @@
+//! `docs/configuration.md`, the configuration reference, generated from the declaration (a test keeps the file in
+//! step, as for `report/ROWS.md`).
+
+use crate::columns::Axis;
+
+/// The keys of a config around the sweep's settings, with what they take (the harness parses them).
+const TABLES: &str = "\
+| key | what it takes |
+|---|---|
+| `name` | the experiment's name; results go to `results/<name>/` |
+| `description` | free text for the report |
+| `reference` | the series label speedups are measured against |
+| `speedup_metric` | the metric speedups are ratios of (default `total_s` for renders, `trace_s` for ray sets) |
+| `repetitions` | 1..=1000, or `\"auto\"` with `min_repetitions`, `max_repetitions`, `target_ci_width` |
+| `warmups` | unrecorded runs of each configuration before its first repetition |
+| `order` | `interleaved` (default), `sequential` or `shuffled` (with `order_seed`) |
+| `[sweep]` | any setting below, a value or a list; the runs are the cartesian product |
+| `[[series]]` | `label` and the settings it fixes; each series runs the sweep's product |
+| `[[exclude]]` | settings (and/or `series`) whose every match is skipped |
+| `[quick]` | overrides for `--quick`: repetitions (and the auto keys), warmups, settings |
+| `[[plot]]` | `file`, `title`, `kind` (`metric`, `speedup`, `efficiency`), `x`, `y` (a metric), `log_x`, `log_y`, `series`, `where` |
+| `[[claim]]` | `text`, `paper`, `kind` (`faster` with `factor` and `per_thread`, or `within` with `tolerance`), `series`, `than`, `metric`, `min_objects`, `max_objects`, `where` |
+";
+
+/// The whole text of configuration.md.
+pub fn text() -> String {
+    let mut md = String::from(
+        "# Configuration reference\n\n\
+         Generated from `schema/src/columns.rs` (the one declaration of every setting); `cargo test -p schema` fails \
+         when this file is out of step, and `BVHLAB_WRITE_DOCS=1 cargo test -p schema` rewrites it. \
+         [experiments.md](experiments.md) shows a whole config and how a run uses it; `report/ROWS.md` lists the \
+         columns a run records.\n\n\
+         ## The tables of a config\n\n",
+    );
+    md.push_str(TABLES);
+    md.push_str(
+        "\n## Settings\n\n\
+         Every setting may be given in `[sweep]`, a `[[series]]`, an `[[exclude]]` or `[quick]`. A setting that \
+         does not apply to a configuration (a list has no split, serial has one thread, only `wide-bvh` has \
+         `node_width`) is normalized to the value in the last column, so it never multiplies runs.\n\n\
+         | key | default | allowed | unit | where it does not apply | meaning |\n|---|---|---|---|---|---|\n",
+    );
+    for &axis in Axis::ALL {
+        let na = axis.not_applicable().map_or_else(|| "applies always".to_string(), |v| format!("`{v}`"));
+        md.push_str(&format!(
+            "| `{}` | `{}` | {} | {} | {na} | {} |\n",
+            axis.key(),
+            axis.default_value(),
+            axis.allowed().replace('|', "\\|"),
+            axis.unit(),
+            axis.doc().trim().replace('|', "\\|"),
+        ));
+    }
+    md
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn docs_configuration_md_is_the_generated_reference() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/configuration.md");
+        let want = super::text();
+        if std::env::var_os("BVHLAB_WRITE_DOCS").is_some() {
+            std::fs::write(&path, &want).unwrap();
+        }
+        let have = std::fs::read_to_string(&path).unwrap_or_default();
+        assert!(
+            have == want,
+            "{} is out of step with schema/src/columns.rs: run `BVHLAB_WRITE_DOCS=1 cargo test -p schema`",
+            path.display()
+        );
+    }
+}
