@@ -2,13 +2,7 @@
 
 use std::path::PathBuf;
 
-use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand};
-use schema::{Named, SceneName};
-use tracer::accel::wide::{ChildOrdering, Kernel};
-use tracer::accel::{AccelKind, BvhParams, Split, Traversal, WideParams};
-use tracer::executor::StrategyKind;
-use tracer::scene::SceneKind;
 
 /// bvhlab's harness: run BVH experiments from TOML configs, report them, and render single images.
 #[derive(Parser, Debug)]
@@ -325,90 +319,15 @@ pub struct ValidateArgs {
     pub quick: bool,
 }
 
-/// A tracer range as clap takes it.
-fn range(r: std::ops::RangeInclusive<u32>) -> std::ops::RangeInclusive<i64> {
-    i64::from(*r.start())..=i64::from(*r.end())
-}
-
-/// A parser accepting exactly the names of `T` (plus `aliases`), listed in `--help`.
-fn choice<T: Named>(aliases: &'static [(&'static str, T)]) -> impl TypedValueParser<Value = T> {
-    let values = T::ALL
-        .iter()
-        .map(move |&t| aliases.iter().filter(|a| a.1 == t).fold(PossibleValue::new(t.name()), |v, a| v.alias(a.0)));
-    PossibleValuesParser::new(values).map(move |s| match aliases.iter().find(|a| a.0 == s) {
-        Some(alias) => alias.1,
-        None => T::from_name(&s).expect("clap checked the value"),
-    })
-}
-
-/// An integer among `values` (the error lists them).
-fn one_of(values: &'static [u32]) -> impl TypedValueParser<Value = u32> {
-    clap::value_parser!(u32).try_map(move |n| {
-        if values.contains(&n) {
-            Ok(n)
-        } else {
-            let list = values.iter().map(u32::to_string).collect::<Vec<_>>().join(", ");
-            Err(format!("{n} is not allowed (allowed: {list})"))
-        }
-    })
-}
-
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// Scene generator, or `sphere-file` to read `--file`.
-    #[arg(long, default_value = SceneKind::RandomSpheres.name(), value_parser = choice::<SceneName>(&[]))]
-    pub scene: SceneName,
-    /// Sphere CSV for `--scene sphere-file` (format: see the tracer's `scene::sphere_file` docs).
+    /// A setting as in a config's [sweep], `KEY=VALUE` (repeatable), e.g. `--set accel=wide-bvh --set
+    /// objects=100000`; every key, default and allowed value is in `harness list` and docs/configuration.md.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Sphere CSV for `--set scene=sphere-file` (format: see the tracer's `scene::sphere_file` docs).
     #[arg(long)]
     pub file: Option<PathBuf>,
-    /// Number of spheres of a generated scene.
-    #[arg(long, default_value_t = 1000)]
-    pub objects: usize,
-    /// Seed of a generated scene.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Acceleration structure.
-    #[arg(long, default_value = AccelKind::FlatBvh.name(), value_parser = choice::<AccelKind>(&[]))]
-    pub accel: AccelKind,
-    /// BVH split rule (`sah` means `binned-sah`).
-    #[arg(long, default_value = Split::CentroidMidpoint.name(), value_parser = choice(&[("sah", Split::BinnedSah)]))]
-    pub split: Split,
-    /// Largest leaf (see `harness list`).
-    #[arg(long, default_value_t = BvhParams::default().leaf_size, value_parser = clap::value_parser!(u32).range(range(BvhParams::LEAF_SIZES)))]
-    pub leaf_size: u32,
-    /// Bins per axis for binned SAH.
-    #[arg(long, default_value_t = BvhParams::default().sah_bins, value_parser = clap::value_parser!(u32).range(range(BvhParams::SAH_BINS)))]
-    pub sah_bins: u32,
-    /// Child visiting order.
-    #[arg(long, default_value = Traversal::Fixed.name(), value_parser = choice::<Traversal>(&[]))]
-    pub traversal: Traversal,
-    /// Children per node of `--accel wide-bvh` (4 or 8).
-    #[arg(long, default_value_t = WideParams::default().width, value_parser = one_of(&WideParams::WIDTHS))]
-    pub node_width: u32,
-    /// Spheres per SIMD leaf block of `--accel wide-bvh` (4, 8 or 16).
-    #[arg(long, default_value_t = WideParams::default().leaf_block, value_parser = one_of(&WideParams::LEAF_BLOCKS))]
-    pub leaf_block: u32,
-    /// SIMD kernel of `--accel wide-bvh` (`auto`: the best this CPU has).
-    #[arg(long, default_value = Kernel::Auto.name(), value_parser = choice::<Kernel>(&[]))]
-    pub simd_kernel: Kernel,
-    /// Child visiting order of `--accel wide-bvh`.
-    #[arg(long, default_value = WideParams::default().order.name(), value_parser = choice::<ChildOrdering>(&[]))]
-    pub child_order: ChildOrdering,
-    /// Parallel strategy.
-    #[arg(long, default_value = StrategyKind::RayonBands.name(), value_parser = choice::<StrategyKind>(&[]))]
-    pub strategy: StrategyKind,
-    /// Worker threads (default: all logical cores).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
-    pub threads: Option<u32>,
-    /// Image width in pixels.
-    #[arg(long, default_value_t = 640, value_parser = clap::value_parser!(u32).range(1..=16384))]
-    pub width: u32,
-    /// Image height in pixels.
-    #[arg(long, default_value_t = 480, value_parser = clap::value_parser!(u32).range(1..=16384))]
-    pub height: u32,
-    /// Reflection bounces.
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=64))]
-    pub max_depth: u32,
     /// Also trace a separate counted pass and print work per ray.
     #[arg(long)]
     pub count: bool,

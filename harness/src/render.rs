@@ -1,10 +1,14 @@
-//! `harness render`: one image, its timings, tree statistics and (optionally) work counters.
+//! `harness render`: one image of one configuration — any backend, every setting from the schema (`--set
+//! KEY=VALUE`, the keys, defaults and allowed values of a config's `[sweep]`) — with its timings, structure
+//! statistics and (optionally) work counters. It builds and renders through the same setup and backend path as a
+//! timed run.
 
 use std::io::BufWriter;
 use std::time::Instant;
 
+use schema::{Axis, Raw, SceneName, Settings, Workload};
 use tracer::accel::wide::Kernel;
-use tracer::accel::{AccelParams, AccelVisitor, Accelerator, BuiltAccel, BvhParams, WideParams};
+use tracer::accel::{AccelVisitor, Accelerator};
 use tracer::counters::{Counters, NoCounters, WorkCounters};
 use tracer::executor::Strategy;
 use tracer::render::{Image, RenderSettings, render};
@@ -12,26 +16,52 @@ use tracer::scene::{Scene, sphere_file};
 
 use crate::cli::RenderArgs;
 use crate::error::Error;
-use schema::SceneName;
+use crate::run::backend::{Backend, Setup};
+use crate::run::measure::make_scene;
 
 /// Logical cores available to this process.
 pub fn available_threads() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
 }
 
-/// Makes the scene the arguments describe.
-fn scene(args: &RenderArgs) -> Result<Scene, Error> {
-    let scene = match args.scene {
-        SceneName::Generated(kind) => kind.generate(args.objects, args.seed),
-        SceneName::SphereFile => {
-            let path =
-                args.file.as_ref().ok_or_else(|| Error::Input("--scene sphere-file needs --file PATH".into()))?;
-            let text = std::fs::read_to_string(path)
-                .map_err(|e| Error::Input(format!("{}: cannot read: {e}", path.display())))?;
-            sphere_file::parse(&text).map_err(|e| Error::Input(format!("{}: {e}", path.display())))?
+/// A `--set` value as a config value: an integer, else a number, else text.
+fn raw(text: &str) -> Raw<'_> {
+    match (text.parse::<i64>(), text.parse::<f64>()) {
+        (Ok(i), _) => Raw::Int(i),
+        (_, Ok(x)) => Raw::Float(x),
+        _ => Raw::Str(text),
+    }
+}
+
+/// The settings of `--set KEY=VALUE` pairs over the schema's defaults, for the render workload, normalized.
+pub fn settings_of(pairs: &[String]) -> Result<Settings, Error> {
+    let mut settings = Settings::default();
+    for pair in pairs {
+        let keys = || Axis::ALL.iter().map(|a| a.key()).collect::<Vec<_>>().join(", ");
+        let Some((key, value)) = pair.split_once('=') else {
+            return Err(Error::Input(format!("--set {pair}: expected KEY=VALUE (allowed keys: {})", keys())));
+        };
+        let axis = Axis::from_key(key.trim())
+            .ok_or_else(|| Error::Input(format!("--set {key}: unknown key (allowed: {})", keys())))?;
+        if axis == Axis::workload {
+            return Err(Error::Input(format!("--set {key}: render draws an image (allowed: the other keys)")));
         }
-    };
-    Ok(Scene { camera: scene.camera.with_resolution(args.width, args.height), ..scene })
+        let value = axis.parse(raw(value.trim())).map_err(|why| Error::Input(format!("--set {key}: {why}")))?;
+        settings.set(value);
+    }
+    settings.workload = Workload::Render;
+    Ok(settings.normalized())
+}
+
+/// The scene file of a `sphere-file` scene (`--file`), read and parsed.
+fn scene_file(settings: &Settings, args: &RenderArgs) -> Result<Option<Scene>, Error> {
+    if settings.scene != SceneName::SphereFile {
+        return Ok(None);
+    }
+    let path = args.file.as_ref().ok_or_else(|| Error::Input("--set scene=sphere-file needs --file PATH".into()))?;
+    let text =
+        std::fs::read_to_string(path).map_err(|e| Error::Input(format!("{}: cannot read: {e}", path.display())))?;
+    sphere_file::parse(&text).map(Some).map_err(|e| Error::Input(format!("{}: {e}", path.display())))
 }
 
 struct Render<'a, C> {
@@ -48,84 +78,75 @@ impl<C: Counters> AccelVisitor for Render<'_, C> {
     }
 }
 
+/// The settings that apply to this configuration, as `key=value`.
+fn describe(settings: &Settings) -> String {
+    let applies = Axis::ALL.iter().filter(|&&a| settings.applies(a) && a != Axis::workload);
+    applies.map(|&a| format!("{}={}", a.key(), settings.get(a))).collect::<Vec<_>>().join(" ")
+}
+
 /// Runs the command.
 pub fn run(args: &RenderArgs) -> Result<(), Error> {
-    if !args.simd_kernel.is_available() {
+    let settings = settings_of(&args.set)?;
+    if let Some(kernel) = settings.simd_kernel.filter(|k| !k.is_available()) {
         let allowed: Vec<&str> = std::iter::once(Kernel::Auto).chain(Kernel::available()).map(Kernel::name).collect();
-        let kernel = args.simd_kernel.name();
         return Err(Error::Input(format!(
-            "--simd-kernel {kernel}: not available on this CPU (allowed here: {})",
+            "--set simd_kernel={}: not available on this CPU (allowed here: {})",
+            kernel.name(),
             allowed.join(", ")
         )));
     }
+    let file = scene_file(&settings, args)?;
+    let setup = Setup::start(&settings)?;
     let t0 = Instant::now();
-    let scene = scene(args)?;
+    let scene = make_scene(&settings, file.as_ref());
     let scene_s = t0.elapsed().as_secs_f64();
-    let params = AccelParams {
-        kind: args.accel,
-        bvh: BvhParams {
-            leaf_size: args.leaf_size,
-            split: args.split,
-            sah_bins: args.sah_bins,
-            traversal: args.traversal,
-            ..BvhParams::default()
-        },
-        wide: WideParams {
-            width: args.node_width,
-            leaf_block: args.leaf_block,
-            kernel: args.simd_kernel,
-            order: args.child_order,
-            ..WideParams::default()
-        },
-    };
-    let threads = args.threads.map_or_else(available_threads, |t| t as usize);
-    let strategy = Strategy::new(args.strategy, threads);
-    let settings = RenderSettings { max_depth: args.max_depth };
-
     let t1 = Instant::now();
-    let accel = BuiltAccel::build(&scene.spheres, &params);
+    let backend = setup.install(|| Backend::build(&settings, &scene.spheres, &setup))?;
     let build_s = t1.elapsed().as_secs_f64();
+    let strategy = settings.strategy();
+    let shading = RenderSettings { max_depth: settings.max_depth };
     let t2 = Instant::now();
-    let (image, _) =
-        accel.visit(Render::<NoCounters> { scene: &scene, settings, strategy, _counters: Default::default() });
+    let (image, _) = setup.install(|| {
+        backend.visit(Render::<NoCounters> {
+            scene: &scene,
+            settings: shading,
+            strategy,
+            _counters: Default::default(),
+        })
+    });
     let render_s = t2.elapsed().as_secs_f64();
 
     let t3 = Instant::now();
-    let file = std::fs::File::create(&args.out)
+    let out = std::fs::File::create(&args.out)
         .map_err(|e| Error::Input(format!("{}: cannot create: {e}", args.out.display())))?;
     image
-        .write_png(BufWriter::new(file))
+        .write_png(BufWriter::new(out))
         .map_err(|e| Error::Run(format!("{}: PNG encoding failed: {e}", args.out.display())))?;
     let encode_s = t3.elapsed().as_secs_f64();
 
-    let stats = accel.stats();
+    let stats = backend.stats();
     say!("scene        {} spheres, fingerprint {:016x}", scene.spheres.len(), scene.fingerprint());
-    match accel.kernel_name() {
-        Some(kernel) => say!("accel        {} {:?} {:?} (kernel {kernel})", args.accel.name(), params.bvh, params.wide),
-        None => say!("accel        {} {:?}", args.accel.name(), params.bvh),
-    }
+    say!("settings     {}", describe(&settings));
+    say!("backend      kernel {}, {}", backend.simd_kernel(), backend.peer_info());
     say!("strategy     {strategy}");
     say!(
-        "tree         {} nodes, {} leaves, depth {}, {} bytes, SAH cost {:.2}",
+        "structure    {} nodes, {} leaves, depth {}, {} bytes, SAH cost {:.2}",
         stats.nodes,
         stats.leaves,
         stats.depth,
         stats.bytes,
         stats.sah_cost
     );
-    say!(
-        "time         scene {:.4} s, build {:.4} s, render {:.4} s, encode {:.4} s",
-        scene_s,
-        build_s,
-        render_s,
-        encode_s
-    );
+    say!("time         scene {scene_s:.4} s, build {build_s:.4} s, render {render_s:.4} s, encode {encode_s:.4} s");
     if args.count {
-        let (_, c) =
-            accel.visit(Render::<WorkCounters> { scene: &scene, settings, strategy, _counters: Default::default() });
+        let (_, c) = setup.install(|| {
+            let counted =
+                Render::<WorkCounters> { scene: &scene, settings: shading, strategy, _counters: Default::default() };
+            backend.visit(counted)
+        });
         let (nodes, boxes, prims) = c.per_ray();
         say!("rays         {} ({:.2} Mrays/s)", c.rays, c.rays as f64 / render_s / 1e6);
-        say!("per ray      {nodes:.2} nodes, {boxes:.2} box tests, {prims:.2} sphere tests");
+        say!("per ray      {nodes:.2} nodes, {boxes:.2} box tests, {prims:.2} sphere tests (peers count none)");
     }
     say!("image        {}×{} hash {:016x} -> {}", image.width, image.height, image.hash(), args.out.display());
     Ok(())

@@ -691,3 +691,46 @@ fn a_closed_stdout_ends_every_printing_command_quietly() {
         assert!(!stderr(&out).contains("panicked"), "harness {args:?}: {}", stderr(&out));
     }
 }
+
+/// `render` takes every setting from the schema (`--set KEY=VALUE`, a config's defaults), through the run's backend
+/// path (a peer renders the same image as our tree); a wrong key or value is one line, exit 2, nothing written.
+#[test]
+fn render_takes_schema_settings_and_refuses_bad_ones() {
+    let dir = temp("render");
+    let render = |sets: &[&str], out: &str| {
+        let mut cmd = harness();
+        cmd.arg("render");
+        for s in sets {
+            cmd.args(["--set", s]);
+        }
+        cmd.args(["--out", dir.join(out).to_str().unwrap()]).output().unwrap()
+    };
+    let hash = |o: &Output| {
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        text.lines().find_map(|l| l.split(" hash ").nth(1)).map(|h| h[..16].to_string()).unwrap_or_default()
+    };
+    let base = ["objects=300", "width=48", "height=32"];
+    let flat = render(&base, "flat.png");
+    assert!(flat.status.success(), "{}", stderr(&flat));
+    let out = String::from_utf8_lossy(&flat.stdout);
+    assert!(out.contains("accel=flat-bvh") && out.contains("strategy=serial"), "schema defaults: {out}");
+    let wide = render(&[&base[..], &["accel=wide-bvh", "node_width=4", "leaf_block=16"]].concat(), "wide.png");
+    assert!(wide.status.success(), "{}", stderr(&wide));
+    let obvhs = render(&[&base[..], &["accel=obvhs-bvh2"]].concat(), "obvhs.png");
+    assert!(obvhs.status.success(), "{}", stderr(&obvhs));
+    assert_eq!(hash(&flat), hash(&wide), "every backend renders the same image");
+    assert_eq!(hash(&flat), hash(&obvhs));
+    assert_eq!(hash(&flat).len(), 16);
+    for (set, want) in [
+        ("foo=1", "--set foo: unknown key (allowed: scene, objects,"),
+        ("leaf_size=99", "--set leaf_size: 99 is out of range (allowed: integers 1..=16)"),
+        ("accel=kd-tree", "--set accel: "),
+        ("objects", "--set objects: expected KEY=VALUE"),
+    ] {
+        let o = render(&[set], "bad.png");
+        assert_eq!(o.status.code(), Some(2), "{set}: {}", stderr(&o));
+        assert_eq!(stderr(&o).trim_end().lines().count(), 1, "{set}: {}", stderr(&o));
+        assert!(stderr(&o).contains(want), "{set}: expected {want:?} in {}", stderr(&o));
+        assert!(!dir.join("bad.png").exists(), "{set}: nothing written");
+    }
+}

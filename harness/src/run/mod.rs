@@ -3,7 +3,7 @@
 
 mod adaptive;
 pub mod arbitrate;
-mod backend;
+pub mod backend;
 pub mod measure;
 pub mod provenance;
 pub mod validate;
