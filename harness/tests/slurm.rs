@@ -168,14 +168,16 @@ fn submit_and_resubmit_against_a_fake_sbatch() {
     let dir = temp("submit");
     let (config, run) = (tiny(&dir), dir.join("run"));
     let path = fake_slurm(&dir);
-    let o = harness()
-        .args(["slurm", "submit"])
-        .arg(&config)
-        .args(["--shards", "2", "--out"])
-        .arg(&run)
-        .env("PATH", &path)
-        .output()
-        .unwrap();
+    let submit = || {
+        harness()
+            .args(["slurm", "submit"])
+            .arg(&config)
+            .args(["--shards", "2", "--out"])
+            .arg(&run)
+            .env("PATH", &path)
+            .output()
+    };
+    let o = submit().unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     let out = stdout(&o);
     assert!(out.contains("array job 1001 (2 shards, at most 2 at once)") && out.contains("merge job 1002"), "{out}");
@@ -199,14 +201,7 @@ fn submit_and_resubmit_against_a_fake_sbatch() {
     assert_eq!(jobs["options"]["shards"], 2);
     assert!(run.join("slurm/logs").is_dir());
     // Submitting twice into one folder is refused.
-    let o = harness()
-        .args(["slurm", "submit"])
-        .arg(&config)
-        .args(["--shards", "2", "--out"])
-        .arg(&run)
-        .env("PATH", &path)
-        .output()
-        .unwrap();
+    let o = submit().unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("already submitted"), "{}", stderr(&o));
 
