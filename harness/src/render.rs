@@ -8,16 +8,13 @@ use std::time::Instant;
 
 use schema::{Axis, Raw, SceneName, Settings, Workload};
 use tracer::accel::wide::Kernel;
-use tracer::accel::{AccelVisitor, Accelerator};
-use tracer::counters::{Counters, NoCounters, WorkCounters};
-use tracer::executor::Strategy;
-use tracer::render::{Image, RenderSettings, render};
+use tracer::counters::{NoCounters, WorkCounters};
 use tracer::scene::{Scene, sphere_file};
 
 use crate::cli::RenderArgs;
 use crate::error::Error;
 use crate::run::backend::{Backend, Setup};
-use crate::run::measure::make_scene;
+use crate::run::measure::{Output, Work, make_scene};
 
 /// Logical cores available to this process.
 pub fn available_threads() -> usize {
@@ -64,20 +61,6 @@ fn scene_file(settings: &Settings, args: &RenderArgs) -> Result<Option<Scene>, E
     sphere_file::parse(&text).map(Some).map_err(|e| Error::Input(format!("{}: {e}", path.display())))
 }
 
-struct Render<'a, C> {
-    scene: &'a Scene,
-    settings: RenderSettings,
-    strategy: Strategy,
-    _counters: std::marker::PhantomData<C>,
-}
-
-impl<C: Counters> AccelVisitor for Render<'_, C> {
-    type Output = (Image, C);
-    fn visit<A: Accelerator>(self, accel: &A) -> (Image, C) {
-        render(self.scene, accel, &self.settings, &self.strategy)
-    }
-}
-
 /// The settings that apply to this configuration, as `key=value`.
 fn describe(settings: &Settings) -> String {
     let applies = Axis::ALL.iter().filter(|&&a| settings.applies(a) && a != Axis::workload);
@@ -103,18 +86,10 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
     let t1 = Instant::now();
     let backend = setup.install(|| Backend::build(&settings, &scene.spheres, &setup))?;
     let build_s = t1.elapsed().as_secs_f64();
-    let strategy = settings.strategy();
-    let shading = RenderSettings { max_depth: settings.max_depth };
     let t2 = Instant::now();
-    let (image, _) = setup.install(|| {
-        backend.visit(Render::<NoCounters> {
-            scene: &scene,
-            settings: shading,
-            strategy,
-            _counters: Default::default(),
-        })
-    });
+    let (output, _) = setup.install(|| backend.visit(Work::<NoCounters>::new(&scene, &settings, None)));
     let render_s = t2.elapsed().as_secs_f64();
+    let Output::Image(image) = output else { unreachable!("the render workload draws an image") };
 
     let t3 = Instant::now();
     let out = std::fs::File::create(&args.out)
@@ -128,7 +103,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
     say!("scene        {} spheres, fingerprint {:016x}", scene.spheres.len(), scene.fingerprint());
     say!("settings     {}", describe(&settings));
     say!("backend      kernel {}, {}", backend.simd_kernel(), backend.peer_info());
-    say!("strategy     {strategy}");
+    say!("strategy     {}", settings.strategy());
     say!(
         "structure    {} nodes, {} leaves, depth {}, {} bytes, SAH cost {:.2}",
         stats.nodes,
@@ -139,11 +114,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
     );
     say!("time         scene {scene_s:.4} s, build {build_s:.4} s, render {render_s:.4} s, encode {encode_s:.4} s");
     if args.count {
-        let (_, c) = setup.install(|| {
-            let counted =
-                Render::<WorkCounters> { scene: &scene, settings: shading, strategy, _counters: Default::default() };
-            backend.visit(counted)
-        });
+        let (_, c) = setup.install(|| backend.visit(Work::<WorkCounters>::new(&scene, &settings, None)));
         let (nodes, boxes, prims) = c.per_ray();
         say!("rays         {} ({:.2} Mrays/s)", c.rays, c.rays as f64 / render_s / 1e6);
         say!("per ray      {nodes:.2} nodes, {boxes:.2} box tests, {prims:.2} sphere tests (peers count none)");

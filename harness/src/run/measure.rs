@@ -82,14 +82,14 @@ pub fn make_scene(s: &Settings, file: Option<&Scene>) -> Scene {
 /// What a workload produced: the rendered image or the ray set's answers. Hashed only after the trace phase's
 /// clock has stopped (hashing every answer is not the backend's work: it cost ~8 ns per ray, more than the whole
 /// rest of the harness's path).
-enum Output {
+pub(crate) enum Output {
     Image(tracer::render::Image),
     Answers(RayAnswers),
 }
 
 impl Output {
     /// The image hash or the ray-set answer hash.
-    fn hash(&self) -> u64 {
+    pub(crate) fn hash(&self) -> u64 {
         match self {
             Output::Image(image) => image.hash(),
             Output::Answers(answers) => answers.hash(),
@@ -98,7 +98,7 @@ impl Output {
 }
 
 /// Runs the workload with counters `C`: its output and the counters.
-struct Work<'a, C> {
+pub(crate) struct Work<'a, C> {
     scene: &'a Scene,
     settings: &'a Settings,
     rays: Option<&'a RaySet>,
@@ -106,7 +106,7 @@ struct Work<'a, C> {
 }
 
 impl<'a, C> Work<'a, C> {
-    fn new(scene: &'a Scene, settings: &'a Settings, rays: Option<&'a RaySet>) -> Self {
+    pub(crate) fn new(scene: &'a Scene, settings: &'a Settings, rays: Option<&'a RaySet>) -> Self {
         Self { scene, settings, rays, _c: std::marker::PhantomData }
     }
 }
@@ -178,11 +178,15 @@ pub fn timed(settings: &Settings, file: Option<&Scene>, rays: Option<&RaySet>, s
         Output::Answers(_) => 0.0,
     };
     let output_hash = output.hash();
-    let overhead_s = rays.filter(|_| matches!(output, Output::Answers(_))).map(|set| {
-        let t = Instant::now();
-        std::hint::black_box(setup.install(|| trace::<_, NoCounters>(&Null, set, &settings.strategy())));
-        t.elapsed().as_secs_f64()
-    });
+    // The harness's own cost: the `null` backend over the same rays, strategy and pool (ray sets only).
+    let overhead_s = match (&output, rays) {
+        (Output::Answers(_), Some(set)) => {
+            let t = Instant::now();
+            std::hint::black_box(setup.install(|| trace::<_, NoCounters>(&Null, set, &settings.strategy())));
+            Some(t.elapsed().as_secs_f64())
+        }
+        _ => None,
+    };
     Ok(Timing {
         setup_s: setup.setup_s,
         scene_s,
