@@ -544,7 +544,8 @@ fn measure(
 pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
     let exp = Experiment::load(request.config)?;
     let exp = if request.quick { exp.quick() } else { exp };
-    let plan = Plan::new(&exp, crate::render::available_threads())?;
+    let mut plan = Plan::new(&exp, crate::render::available_threads())?;
+    plan.skip_unavailable(&exp.path.display().to_string(), false)?;
     let root = PathBuf::from(git(Path::new("."), &["rev-parse", "--show-toplevel"])?);
     let rev = git(&root, &["rev-parse", "--verify", &format!("{}^{{commit}}", request.base)])?;
     let build = Build::running()?;
@@ -552,7 +553,7 @@ pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
     let (old_bin, new_bin) = (base_binary(&root, &build, &rev)?, new_copy.0.clone());
     let bins = (old_bin.as_path(), new_bin.as_path());
     let rounds = (exp.warmups, exp.repetitions.max());
-    let all: Vec<&Configuration> = plan.configurations.iter().collect();
+    let all: Vec<&Configuration> = plan.runnable().collect();
     let mut pairs = measure(&plan, &all, rounds, bins, &root, "")?;
     let speed = |c: &Configuration, pair: &Pair| {
         let e: Estimate = ratio_ci(&pair.new, &pair.old, seed_for(&c.id));

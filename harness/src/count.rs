@@ -25,9 +25,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use report::check::instructions::{self, InstructionCount};
-use schema::PeerKind;
 use tracer::executor::StrategyKind;
 
+use crate::backend;
 use crate::config::Experiment;
 use crate::error::Error;
 use crate::plan::{self, Configuration, Plan};
@@ -58,8 +58,8 @@ pub struct CountRequest<'a> {
 /// Whether a configuration's phases run in the one thread callgrind follows: `None` if counted, else why not.
 fn uncountable(c: &Configuration) -> Option<&'static str> {
     let s = &c.settings;
-    if s.peer().is_some_and(PeerKind::needs_embree) {
-        Some("Embree")
+    if backend::of(s.accel).own_threads() {
+        Some("the backend's own threads")
     } else if s.strategy == StrategyKind::MpscThreads {
         Some("mpsc-threads")
     } else if s.strategy().threads > 1 {
@@ -73,7 +73,8 @@ fn uncountable(c: &Configuration) -> Option<&'static str> {
 pub fn run(request: &CountRequest<'_>) -> Result<(), Error> {
     let exp = Experiment::load(request.config)?;
     let exp = if request.quick { exp.quick() } else { exp };
-    let plan = Plan::new(&exp, crate::render::available_threads())?;
+    let mut plan = Plan::new(&exp, crate::render::available_threads())?;
+    plan.skip_unavailable(&exp.path.display().to_string(), false)?;
     let valgrind = valgrind_version()?;
     let dir = request.out.clone().unwrap_or_else(|| crate::run::default_dir(&exp, request.quick));
     let io = |what: &str, p: &Path, e: std::io::Error| Error::Run(format!("{}: cannot {what}: {e}", p.display()));
@@ -98,7 +99,7 @@ pub fn run(request: &CountRequest<'_>) -> Result<(), Error> {
 
     let mut skipped: BTreeMap<&str, Vec<String>> = BTreeMap::new();
     let mut todo: Vec<&Configuration> = Vec::new();
-    for c in &plan.configurations {
+    for c in plan.runnable() {
         match uncountable(c) {
             Some(why) => skipped.entry(why).or_default().push(format!("{} objects {}", c.series, c.settings.objects)),
             None => todo.push(c),

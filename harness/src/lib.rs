@@ -5,6 +5,7 @@
 #[macro_use]
 mod output;
 mod ab;
+mod backend;
 mod baseline;
 mod check;
 mod cli;
@@ -139,7 +140,7 @@ fn run_command(args: &RunArgs) -> Result<(), Error> {
         (false, false) => run::Existing::MoveAside,
     };
     let before: std::collections::BTreeSet<usize> = plan.runs.iter().map(|r| r.config).collect();
-    skip_unavailable(&exp, &mut plan, args.require_all)?;
+    plan.skip_unavailable(&exp.path.display().to_string(), args.require_all)?;
     if let Some((i, n)) = shard {
         let config = std::path::absolute(&args.config).unwrap_or_else(|_| args.config.clone());
         let skipped = before.iter().filter(|c| !plan.runs.iter().any(|r| r.config == **c));
@@ -165,30 +166,6 @@ fn run_command(args: &RunArgs) -> Result<(), Error> {
     if failed && args.check_claims {
         return Err(Error::Run("a claim failed (see the claims above and REPORT.md)".into()));
     }
-    Ok(())
-}
-
-/// Drops configurations whose backend cannot run here (Embree absent), with a note for the report; with
-/// `require_all` that is bad input instead.
-fn skip_unavailable(exp: &Experiment, plan: &mut Plan, require_all: bool) -> Result<(), Error> {
-    let needs = |i: usize| plan.configurations[i].settings.peer().is_some_and(schema::PeerKind::needs_embree);
-    if !(0..plan.configurations.len()).any(needs) {
-        return Ok(());
-    }
-    let Err(e) = peers::embree_status() else { return Ok(()) };
-    if require_all {
-        return Err(Error::Input(format!(
-            "{}: accel embree/embree-packets: Embree 4 is unavailable: {e}",
-            exp.path.display()
-        )));
-    }
-    let mut skipped: Vec<String> =
-        plan.configurations.iter().enumerate().filter(|(i, _)| needs(*i)).map(|(_, c)| c.series.clone()).collect();
-    skipped.dedup();
-    plan.runs.retain(|r| !needs(r.config));
-    let note = format!("Embree 4 is unavailable, so these series were skipped: {}. {e}", skipped.join(", "));
-    note!("note: {note}");
-    plan.notes.push(note);
     Ok(())
 }
 
@@ -252,7 +229,8 @@ fn report_command(args: &ReportArgs) -> Result<(), Error> {
 fn validate_command(args: &ValidateArgs) -> Result<(), Error> {
     let exp = load(&args.config, args.quick)?;
     let cores = render::available_threads();
-    let plan = Plan::new(&exp, cores)?;
+    let mut plan = Plan::new(&exp, cores)?;
+    plan.skip_unavailable(&exp.path.display().to_string(), false)?;
     let seconds: f64 =
         plan.runs.iter().map(|r| plan::estimate_seconds(&plan.configurations[r.config].settings, cores)).sum();
     let series: Vec<String> = exp

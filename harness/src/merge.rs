@@ -294,7 +294,7 @@ pub fn run(run_dir: &Path, allow_mixed_machines: bool) -> Result<(), Error> {
     note.push_str(&format!("; machines: {}.", described.join(", ")));
     let skipped: usize = shards.iter().map(|s| s.info.skipped.len()).sum();
     if skipped > 0 {
-        note.push_str(&format!(" {skipped} configurations were skipped where their backend was unavailable (Embree)."));
+        note.push_str(&format!(" {skipped} configurations were skipped where their backend could not run."));
     }
     let warnings = if machines.len() > 1 {
         vec![format!(

@@ -6,14 +6,12 @@
 use std::io::BufWriter;
 use std::time::Instant;
 
-use schema::{Axis, Raw, SceneName, Settings, Workload};
-use tracer::accel::wide::Kernel;
-use tracer::counters::{NoCounters, WorkCounters};
+use schema::{Axis, Named, Raw, SceneName, Settings, Workload};
 use tracer::scene::{Scene, sphere_file};
 
+use crate::backend::{self, Setup};
 use crate::cli::RenderArgs;
 use crate::error::Error;
-use crate::run::backend::{Backend, Setup};
 use crate::run::measure::{Output, Work, make_scene};
 
 /// Logical cores available to this process.
@@ -70,12 +68,13 @@ fn describe(settings: &Settings) -> String {
 /// Runs the command.
 pub fn run(args: &RenderArgs) -> Result<(), Error> {
     let settings = settings_of(&args.set)?;
-    if let Some(kernel) = settings.simd_kernel.filter(|k| !k.is_available()) {
-        let allowed: Vec<&str> = std::iter::once(Kernel::Auto).chain(Kernel::available()).map(Kernel::name).collect();
+    let backend = backend::of(settings.accel);
+    backend.available(&settings).map_err(|e| Error::Input(format!("--set accel={}: {e}", settings.accel.name())))?;
+    if let Some((axis, allowed)) = backend.refuses(&settings) {
         return Err(Error::Input(format!(
-            "--set simd_kernel={}: not available on this CPU (allowed here: {})",
-            kernel.name(),
-            allowed.join(", ")
+            "--set {}={}: not allowed here (allowed: {allowed})",
+            axis.key(),
+            settings.get(axis)
         )));
     }
     let file = scene_file(&settings, args)?;
@@ -84,10 +83,10 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
     let scene = make_scene(&settings, file.as_ref());
     let scene_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let backend = setup.install(|| Backend::build(&settings, &scene.spheres, &setup))?;
+    let built = setup.install(|| backend.build(&settings, &scene.spheres, &setup))?;
     let build_s = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    let (output, _) = setup.install(|| backend.visit(Work::<NoCounters>::new(&scene, &settings, None)));
+    let output = setup.install(|| built.structure.run(Work::new(&scene, &settings, None)));
     let render_s = t2.elapsed().as_secs_f64();
     let Output::Image(image) = output else { unreachable!("the render workload draws an image") };
 
@@ -99,10 +98,10 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
         .map_err(|e| Error::Run(format!("{}: PNG encoding failed: {e}", args.out.display())))?;
     let encode_s = t3.elapsed().as_secs_f64();
 
-    let stats = backend.stats();
+    let stats = built.structure.stats();
     say!("scene        {} spheres, fingerprint {:016x}", scene.spheres.len(), scene.fingerprint());
     say!("settings     {}", describe(&settings));
-    say!("backend      kernel {}, {}", backend.simd_kernel(), backend.peer_info());
+    say!("backend      {}: kernel {}, {}", backend.name(), built.simd_kernel, built.peer_info);
     say!("strategy     {}", settings.strategy());
     say!(
         "structure    {} nodes, {} leaves, depth {}, {} bytes, SAH cost {:.2}",
@@ -114,7 +113,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
     );
     say!("time         scene {scene_s:.4} s, build {build_s:.4} s, render {render_s:.4} s, encode {encode_s:.4} s");
     if args.count {
-        let (_, c) = setup.install(|| backend.visit(Work::<WorkCounters>::new(&scene, &settings, None)));
+        let (_, c) = setup.install(|| built.structure.run_counted(Work::new(&scene, &settings, None)));
         let (nodes, boxes, prims) = c.per_ray();
         say!("rays         {} ({:.2} Mrays/s)", c.rays, c.rays as f64 / render_s / 1e6);
         say!("per ray      {nodes:.2} nodes, {boxes:.2} box tests, {prims:.2} sphere tests (peers count none)");

@@ -199,12 +199,13 @@ fn wide_bvh_runs_validated_and_records_its_kernel() {
     let report = std::fs::read_to_string(out.join("REPORT.md")).unwrap();
     if Kernel::Avx512.is_available() {
         assert!(kernels.iter().any(|k| k == "avx512"), "{kernels:?}");
-        assert!(!report.contains("lacks the SIMD kernels"), "{report}");
+        assert!(!report.contains("so they were skipped"), "{report}");
     } else {
         assert!(kernels.iter().all(|k| k == "auto"), "{kernels:?}");
-        assert!(report.contains("This CPU lacks the SIMD kernels of these series, so they were skipped"), "{report}");
+        let note = "simd_kernel avx512: this CPU lacks it";
+        assert!(report.contains("cannot run here, so they were skipped") && report.contains(note), "{report}");
         let o = harness().args(["validate", cfg.to_str().unwrap()]).output().unwrap();
-        assert!(String::from_utf8_lossy(&o.stdout).contains("lacks the SIMD kernels"));
+        assert!(String::from_utf8_lossy(&o.stdout).contains(note));
     }
 }
 
@@ -530,12 +531,15 @@ fn a_missing_embree_is_reported_skipped_or_refused() {
     let rows = recorded(&out.join("runs.csv"));
     assert_eq!(rows.len(), 1, "only the flat BVH ran");
     let report = std::fs::read_to_string(out.join("REPORT.md")).unwrap();
-    assert!(report.contains("Embree 4 is unavailable, so these series were skipped: embree"), "{report}");
+    assert!(
+        report.contains("These series cannot run here, so they were skipped: embree. Embree 4 not found"),
+        "{report}"
+    );
     let refused = dir.join("refused");
     let o = without(&["run", cfg.to_str().unwrap(), "--out", refused.to_str().unwrap(), "--require-all"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert_eq!(stderr(&o).trim_end().lines().count(), 1);
-    assert!(stderr(&o).contains("Embree 4 is unavailable") && !refused.exists());
+    assert!(stderr(&o).contains("peers.toml: accel embree: Embree 4 not found") && !refused.exists());
 }
 
 #[test]

@@ -11,10 +11,10 @@ pub mod shard;
 use std::collections::HashSet;
 use std::sync::Arc;
 
-use schema::{Axis, AxisValue, Named, PacketSize, PeerKind, SceneName, Settings, Threads};
-use tracer::accel::wide::Kernel;
+use schema::{Axis, AxisValue, Named, SceneName, Settings, Threads};
 use tracer::scene::{Scene, sphere_file};
 
+use crate::backend::{self, Unavailable};
 use crate::config::{Experiment, Series};
 use crate::error::Error;
 
@@ -92,58 +92,32 @@ fn settings(values: &[AxisValue], file: Option<&SphereFile>) -> Settings {
     s
 }
 
-/// Drops the configurations whose SIMD kernel this CPU cannot run (an `avx512` series on an AVX2 machine), so that
-/// one config runs on every machine kind; returns the note that says which series were skipped and what the CPU
-/// has, or `None` when every kernel runs here.
-fn skip_unavailable_kernels(configurations: &mut Vec<Configuration>) -> Option<String> {
-    let missing: Vec<(String, Kernel)> = configurations
-        .iter()
-        .filter_map(|c| c.settings.simd_kernel.filter(|k| !k.is_available()).map(|k| (c.series.clone(), k)))
-        .collect();
-    if missing.is_empty() {
-        return None;
-    }
-    configurations.retain(|c| c.settings.simd_kernel.is_none_or(Kernel::is_available));
-    let mut series: Vec<String> = missing.iter().map(|(s, k)| format!("{s} ({})", k.name())).collect();
-    series.dedup();
-    let here = Kernel::available().into_iter().map(Kernel::name).collect::<Vec<_>>().join(", ");
-    Some(format!(
-        "This CPU lacks the SIMD kernels of these series, so they were skipped: {} (it runs: {here}).",
-        series.join(", ")
-    ))
-}
-
-/// Refuses a packet size `embree-packets` cannot trace (before anything is written): it takes 8 (`rtcIntersect8`)
-/// or 16 (`rtcIntersect16`), not the wide BVH's 1. Checked on the configured value (`values`; normalization gives
-/// a configuration that names none 16), with the key path of the series (`index`) or sweep that names it.
-fn check_embree_packets(
+/// Refuses a configured value that the configuration's backend cannot run though the schema allows it (Embree's
+/// packets take 8 or 16 rays, not the wide BVH's 1), before anything is written. Checked on the configured value
+/// (`values`), with the key path of the series (`index`) or sweep that names it.
+fn check_backend_allows(
     file: &str,
     exp: &Experiment,
     (index, series): (usize, &Series),
     values: &[AxisValue],
     configured: &Settings,
 ) -> Result<(), Error> {
-    let axis = Axis::packet_size;
-    if configured.peer() != Some(PeerKind::EmbreePackets) || !configured.applies(axis) {
-        return Ok(());
-    }
-    let (path, list) = match (series.fixed.get(&axis), exp.sweep.get(&axis)) {
-        (Some(list), _) => (format!("series[{index}].{}", axis.key()), list),
-        (None, Some(list)) => (format!("sweep.{}", axis.key()), list),
-        (None, None) => return Ok(()),
+    // As written: normalization replaces a value that does not apply with the backend's default.
+    let mut written = Settings::default();
+    values.iter().for_each(|v| written.set(v.clone()));
+    let Some((axis, allowed)) = backend::of(configured.accel).refuses(&written) else { return Ok(()) };
+    let value = &values[Axis::ALL.iter().position(|a| *a == axis).expect("an axis")];
+    let (path, i) = match (series.fixed.get(&axis), exp.sweep.get(&axis)) {
+        (Some(list), _) => (format!("series[{index}].{}", axis.key()), list.iter().position(|v| v == value)),
+        (None, Some(list)) => (format!("sweep.{}", axis.key()), list.iter().position(|v| v == value)),
+        (None, None) => return Ok(()), // not named: the backend's default
     };
-    let value = &values[Axis::ALL.iter().position(|a| *a == axis).expect("packet_size is an axis")];
-    match value {
-        AxisValue::packet_size(Some(size)) if !PacketSize::EMBREE.contains(&size.0) => {
-            let i = list.iter().position(|v| v == value).unwrap_or(0);
-            Err(Error::Input(format!(
-                "{file}: {path}[{i}]: {size} is not allowed with accel {} (allowed there: {})",
-                PeerKind::EmbreePackets.name(),
-                PacketSize::embree_allowed()
-            )))
-        }
-        _ => Ok(()),
-    }
+    let at = i.map_or(String::new(), |i| format!("[{i}]"));
+    Err(Error::Input(format!(
+        "{file}: {path}{at}: {} is not allowed with accel {} (allowed there: {allowed})",
+        written.get(axis),
+        configured.accel.name()
+    )))
 }
 
 impl Plan {
@@ -187,7 +161,7 @@ impl Plan {
                     continue;
                 }
                 let configured = settings(&values, sphere_file.as_ref());
-                check_embree_packets(&file, exp, (index, s), &values, &configured)?;
+                check_backend_allows(&file, exp, (index, s), &values, &configured)?;
                 // The id is the configured settings' (machine-independent); the run resolves `all` here.
                 let id = schema::row::config_id(&s.label, &configured);
                 if seen.insert(id.clone()) {
@@ -210,15 +184,6 @@ impl Plan {
             return Err(Error::Input(format!("{file}: exclude: every run is excluded (nothing to run)")));
         }
         let mut notes = Vec::new();
-        if let Some(note) = skip_unavailable_kernels(&mut configurations) {
-            if configurations.is_empty() {
-                return Err(Error::Input(format!(
-                    "{file}: {}: {note} Nothing is left to run.",
-                    Axis::simd_kernel.key()
-                )));
-            }
-            notes.push(note);
-        }
         if !above_cores.is_empty() {
             above_cores.sort_unstable();
             above_cores.dedup();
@@ -228,6 +193,46 @@ impl Plan {
         }
         let runs = order::runs(exp, configurations.len());
         Ok(Plan { configurations, runs, sphere_file, notes, shard: None })
+    }
+
+    /// Drops the runs of the configurations whose backend cannot run here (Embree absent, a SIMD kernel this CPU
+    /// lacks), so one config runs on every machine kind, with a note per reason for the report. With
+    /// `require_all`, what could be installed is bad input instead; nothing left to run is bad input too.
+    pub fn skip_unavailable(&mut self, file: &str, require_all: bool) -> Result<(), Error> {
+        let mut skipped: Vec<(Unavailable, Vec<String>)> = Vec::new();
+        let mut unavailable = HashSet::new();
+        for (i, c) in self.configurations.iter().enumerate() {
+            let Err(why) = backend::of(c.settings.accel).available(&c.settings) else { continue };
+            if why.installable && require_all {
+                return Err(Error::Input(format!("{file}: accel {}: {why}", c.settings.accel.name())));
+            }
+            unavailable.insert(i);
+            match skipped.iter_mut().find(|(w, _)| *w == why) {
+                Some((_, series)) if series.contains(&c.series) => {}
+                Some((_, series)) => series.push(c.series.clone()),
+                None => skipped.push((why, vec![c.series.clone()])),
+            }
+        }
+        if skipped.is_empty() {
+            return Ok(());
+        }
+        let had_runs = !self.runs.is_empty();
+        self.runs.retain(|r| !unavailable.contains(&r.config));
+        for (why, series) in skipped {
+            let note = format!("These series cannot run here, so they were skipped: {}. {why}", series.join(", "));
+            note!("note: {note}");
+            self.notes.push(note);
+        }
+        if had_runs && self.runs.is_empty() {
+            return Err(Error::Input(format!("{file}: nothing is left to run here (see the notes above)")));
+        }
+        Ok(())
+    }
+
+    /// The configurations that still have runs (after [`Plan::skip_unavailable`]).
+    pub fn runnable(&self) -> impl Iterator<Item = &Configuration> {
+        let planned: HashSet<usize> = self.runs.iter().map(|r| r.config).collect();
+        self.configurations.iter().enumerate().filter(move |(i, _)| planned.contains(i)).map(|(_, c)| c)
     }
 
     /// The sphere file's scene, if the plan has one.
@@ -245,7 +250,7 @@ impl Plan {
 mod tests {
     use std::path::Path;
 
-    use schema::Named;
+    use schema::{Named, PacketSize, PeerKind};
     use tracer::accel::{AccelKind, Split};
     use tracer::executor::StrategyKind;
 

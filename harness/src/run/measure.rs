@@ -11,7 +11,7 @@ use tracer::rays::{RayAnswers, RaySet, trace};
 use tracer::render::{RenderSettings, render};
 use tracer::scene::Scene;
 
-use super::backend::{Backend, Setup};
+use crate::backend::{self, Setup};
 use crate::error::Error;
 
 /// Wall times of one run, and what it produced (a worker process answers with it as JSON).
@@ -82,14 +82,14 @@ pub fn make_scene(s: &Settings, file: Option<&Scene>) -> Scene {
 /// What a workload produced: the rendered image or the ray set's answers. Hashed only after the trace phase's
 /// clock has stopped (hashing every answer is not the backend's work: it cost ~8 ns per ray, more than the whole
 /// rest of the harness's path).
-pub(crate) enum Output {
+pub enum Output {
     Image(tracer::render::Image),
     Answers(RayAnswers),
 }
 
 impl Output {
     /// The image hash or the ray-set answer hash.
-    pub(crate) fn hash(&self) -> u64 {
+    pub fn hash(&self) -> u64 {
         match self {
             Output::Image(image) => image.hash(),
             Output::Answers(answers) => answers.hash(),
@@ -98,7 +98,7 @@ impl Output {
 }
 
 /// Runs the workload with counters `C`: its output and the counters.
-pub(crate) struct Work<'a, C> {
+pub struct Work<'a, C> {
     scene: &'a Scene,
     settings: &'a Settings,
     rays: Option<&'a RaySet>,
@@ -106,7 +106,7 @@ pub(crate) struct Work<'a, C> {
 }
 
 impl<'a, C> Work<'a, C> {
-    pub(crate) fn new(scene: &'a Scene, settings: &'a Settings, rays: Option<&'a RaySet>) -> Self {
+    pub fn new(scene: &'a Scene, settings: &'a Settings, rays: Option<&'a RaySet>) -> Self {
         Self { scene, settings, rays, _c: std::marker::PhantomData }
     }
 }
@@ -162,16 +162,17 @@ pub fn timed(settings: &Settings, file: Option<&Scene>, rays: Option<&RaySet>, s
     let scene = make_scene(settings, file);
     let scene_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let backend = if settings.peer().is_some_and(schema::PeerKind::needs_embree) {
-        Backend::build(settings, &scene.spheres, setup)? // on Embree's device (its TBB threads)
+    let backend = backend::of(settings.accel);
+    let built = if backend.own_threads() {
+        backend.build(settings, &scene.spheres, setup)? // on its own threads (Embree's TBB)
     } else {
-        // Ours and obvhs build in the pool: the phase function runs there (installing from inside the pool
-        // again, as `Backend::build` does, runs in place), where callgrind sees the building thread enter it.
-        setup.install(|| bvhlab_phase_build(|| Backend::build(settings, &scene.spheres, setup)))?
+        // The others build in the pool: the phase function runs there (installing from inside the pool again, as
+        // the backends' builds do, runs in place), where callgrind sees the building thread enter it.
+        setup.install(|| bvhlab_phase_build(|| backend.build(settings, &scene.spheres, setup)))?
     };
     let build_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let (output, _) = setup.install(|| backend.visit(Work::<NoCounters>::new(&scene, settings, rays)));
+    let output = setup.install(|| built.structure.run(Work::new(&scene, settings, rays)));
     let trace_s = t.elapsed().as_secs_f64();
     let encode_s = match &output {
         Output::Image(image) => encode_seconds(image),
@@ -196,9 +197,9 @@ pub fn timed(settings: &Settings, file: Option<&Scene>, rays: Option<&RaySet>, s
         encode_s,
         output_hash,
         scene_fingerprint: scene.fingerprint(),
-        stats: backend.stats(),
-        peer_info: backend.peer_info(),
-        simd_kernel: backend.simd_kernel().to_string(),
+        stats: built.structure.stats(),
+        peer_info: built.peer_info,
+        simd_kernel: built.simd_kernel.to_string(),
     })
 }
 
@@ -212,21 +213,12 @@ pub fn counted(
 ) -> Result<(WorkCounters, u64, RayAnswers), Error> {
     let scene = make_scene(settings, file);
     let setup = Setup::start(settings)?;
-    let backend = Backend::build(settings, &scene.spheres, &setup)?;
-    let (output, c) = setup.install(|| backend.visit(Work::<WorkCounters>::new(&scene, settings, rays)));
+    let built = backend::of(settings.accel).build(settings, &scene.spheres, &setup)?;
+    let (output, c) = setup.install(|| built.structure.run_counted(Work::new(&scene, settings, rays)));
     let hash = output.hash();
     let answers = match (output, rays) {
         (Output::Answers(a), Some(r)) if std::ptr::eq(r, answer_rays) => a,
-        _ => {
-            struct Answers<'a>(&'a RaySet, &'a Settings);
-            impl AccelVisitor for Answers<'_> {
-                type Output = RayAnswers;
-                fn visit<A: Accelerator>(self, a: &A) -> RayAnswers {
-                    trace::<_, NoCounters>(a, self.0, &self.1.strategy()).0
-                }
-            }
-            setup.install(|| backend.visit(Answers(answer_rays, settings)))
-        }
+        _ => setup.install(|| built.structure.answers(answer_rays, &settings.strategy())),
     };
     Ok((c, hash, answers))
 }

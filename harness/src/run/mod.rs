@@ -3,7 +3,6 @@
 
 mod adaptive;
 pub mod arbitrate;
-pub mod backend;
 pub mod measure;
 pub mod provenance;
 pub mod validate;
@@ -12,17 +11,17 @@ pub mod worker;
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
-use schema::{PeerKind, Row, Settings, Workload};
+use schema::{Row, Settings, Workload};
 use tracer::counters::WorkCounters;
 use tracer::rays::RaySet;
 
+use crate::backend::{self, Setup};
 use crate::config::Experiment;
 use crate::error::Error;
 use crate::output::Progress;
 use crate::plan::{Configuration, Plan};
 use crate::rows::RowLog;
 use adaptive::Sampler;
-use backend::Setup;
 use measure::Timing;
 use provenance::{Provenance, load_average_1m, timestamp_now};
 use validate::RayBank;
@@ -313,7 +312,8 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, existing: Existing) -> R
         );
     }
     // Every configuration is timed in one process with one setup (its warm-ups first, then every repetition):
-    // Embree in a worker process of its own, kept while its runs interleave with others'; the rest here.
+    // A backend with threads of its own (Embree) in a worker process of its own, kept while its runs interleave
+    // with others'; the rest here.
     let mut pending: HashMap<usize, Pending> = HashMap::new();
     for run in &todo {
         let p = pending.entry(run.config).or_default();
@@ -366,7 +366,7 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, existing: Existing) -> R
         }
         let started_run = Started::now();
         let started = std::time::Instant::now();
-        let timing = if c.settings.peer().is_some_and(PeerKind::needs_embree) {
+        let timing = if backend::of(c.settings.accel).own_threads() {
             if let std::collections::hash_map::Entry::Vacant(e) = workers.entry(run.config) {
                 let exe = std::env::current_exe()
                     .map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;

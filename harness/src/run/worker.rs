@@ -14,8 +14,8 @@ use schema::Settings;
 use serde::{Deserialize, Serialize};
 use tracer::rays::RaySet;
 
-use super::backend::Setup;
 use super::measure::{self, Timing};
+use crate::backend::Setup;
 use crate::error::Error;
 use crate::plan::SphereFile;
 

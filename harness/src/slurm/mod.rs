@@ -40,7 +40,8 @@ pub struct ShardInfo {
     pub config_hash: String,
     /// Whether the config's [quick] overrides applied.
     pub quick: bool,
-    /// Configurations of the shard skipped because their backend is unavailable there (Embree): not planned rows.
+    /// Configurations of the shard skipped because their backend cannot run there (Embree absent, a SIMD kernel
+    /// the CPU lacks): not planned rows.
     #[serde(default)]
     pub skipped: Vec<String>,
 }
