@@ -38,8 +38,11 @@ fn planned(plan: &Plan, shard_of: &[usize], i: usize) -> Vec<(String, u32)> {
 /// never timed, so its one row completes it; one `skipped` for want of its backend has none).
 fn absent(plan: &Plan, shard_of: &[usize], i: usize, rows: &[Row], skipped: &[String]) -> Vec<(String, u32)> {
     let done: HashSet<(&str, u32)> = rows.iter().map(|r| (r.config_id.as_str(), r.repetition)).collect();
-    let mut complete: HashSet<&str> =
-        rows.iter().filter(|r| r.validation == "FAILED").map(|r| r.config_id.as_str()).collect();
+    let mut complete: HashSet<&str> = rows
+        .iter()
+        .filter(|r| r.validation == schema::ValidationStatus::Failed)
+        .map(|r| r.config_id.as_str())
+        .collect();
     complete.extend(skipped.iter().map(String::as_str));
     planned(plan, shard_of, i)
         .into_iter()

@@ -172,7 +172,7 @@ fn wide_bvh_runs_validated_and_records_its_kernel() {
     let rows = schema::row::read_rows(&std::fs::read_to_string(out.join("runs.csv")).unwrap()).unwrap();
     assert_eq!(rows.len(), 2 * 2 * 2, "2 workloads x 2 widths x 2 kernels");
     for r in &rows {
-        assert_eq!((r.validation.as_str(), r.validated_against.as_str()), ("exact", "list"), "{r:?}");
+        assert_eq!((r.validation, r.validated_against.as_str()), (schema::ValidationStatus::Exact, "list"), "{r:?}");
         let want = if r.simd_kernel == Some(Kernel::Scalar) { Kernel::Scalar } else { Kernel::Auto.resolve_for(4) };
         assert_eq!(r.simd_kernel_used, want.name(), "{:?}", r.simd_kernel);
         assert_eq!(r.child_order.map(|o| o.name()), Some("octant"));

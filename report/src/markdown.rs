@@ -175,7 +175,7 @@ fn overhead_line(md: &mut String, runs: &[Run]) {
 fn repetitions_line(md: &mut String, runs: &[Run]) {
     // Per configuration: its rule, repetitions and the interval width after its last one.
     let mut configs: BTreeMap<&str, (&str, u32, f64)> = BTreeMap::new();
-    for r in runs.iter().filter(|r| r.text("validation") != "FAILED") {
+    for r in runs.iter().filter(|r| r.text("validation") != schema::Named::name(schema::ValidationStatus::Failed)) {
         let e = configs.entry(r.config_id()).or_insert((r.text("repetition_rule"), 0, f64::NAN));
         e.1 += 1;
         e.2 = r.num("interval_width");

@@ -103,7 +103,8 @@ pub fn read(path: &Path) -> Result<Rows, Error> {
     if rows.is_empty() {
         return Err(Error::NoRows { path: path.into() });
     }
-    let (failed, timed): (Vec<Row>, Vec<Row>) = rows.into_iter().partition(|r| r.validation == "FAILED");
+    let (failed, timed): (Vec<Row>, Vec<Row>) =
+        rows.into_iter().partition(|r| r.validation == schema::ValidationStatus::Failed);
     let runs: Vec<Run> = timed.into_iter().map(Run::new).collect();
     let frame = frame(&runs).map_err(|e| Error::read(path, e))?;
     Ok(Rows { frame, runs, failed: failed.into_iter().map(Run::new).collect() })

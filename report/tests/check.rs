@@ -138,7 +138,7 @@ fn runs_csv(g: &Gen) -> String {
                         load_avg_1m: g.load,
                         timestamp: "2025-11-22T03:00:00Z".into(),
                         harness_version: "0.1.0".into(),
-                        validation: "exact".into(),
+                        validation: schema::ValidationStatus::Exact,
                         validated_against: AccelKind::List.name().into(),
                         machine_id: g.machine.into(),
                         boot_id: g.boot.into(),

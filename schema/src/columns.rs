@@ -9,7 +9,7 @@ use tracer::scene::SceneKind;
 
 use crate::names::{
     Accel, EmbreeIsa, EmbreeQuality, LeafBlock, NodeWidth, ObvhsQuality, PacketSize, PeerKind, SceneName, Threads,
-    Workload,
+    ValidationStatus, Workload,
 };
 
 declare_columns! {
@@ -145,8 +145,9 @@ declare_columns! {
         timestamp: String, Provenance;
         /// Harness crate version.
         harness_version: String, Provenance;
-        /// `exact` when the backend agreed with the reference, `FAILED` (and no timings) when it did not.
-        validation: String, Validation;
+        /// `exact` when the backend agreed with the reference, `FAILED` (and no timings) when it did not, `unchecked`
+        /// for a backend that answers nothing (`null`).
+        validation: ValidationStatus, Validation;
         /// The reference the backend was validated against.
         validated_against: String, Validation;
         /// Rays whose answers disagreed with the reference and that f64 brute force did not excuse as grazing.

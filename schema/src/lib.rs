@@ -24,7 +24,7 @@ pub mod value;
 pub use columns::{Axis, AxisValue, Row, Settings};
 pub use names::{
     Accel, EmbreeIsa, EmbreeQuality, LeafBlock, Named, NodeWidth, ObvhsQuality, PacketSize, PeerKind, SceneName,
-    Threads, Workload,
+    Threads, ValidationStatus, Workload,
 };
 pub use row::{Cell, Column, Kind, Role};
 pub use value::{AxisType, Raw};

@@ -91,6 +91,24 @@ impl PeerKind {
 }
 
 named_enum! {
+    /// How a configuration's answers compared with the reference's (the `validation` column).
+    ValidationStatus {
+        /// Every disagreement was tolerated by f64 brute force (or there was none): timed.
+        Exact = "exact",
+        /// Some disagreement was not: recorded once, never timed.
+        Failed = "FAILED",
+        /// Not compared: the backend answers nothing (the `null` backend).
+        Unchecked = "unchecked",
+    }
+}
+
+impl Default for ValidationStatus {
+    fn default() -> Self {
+        ValidationStatus::Unchecked
+    }
+}
+
+named_enum! {
     /// obvhs 0.4's build presets: each is `BvhBuildParams::<name>_build()` (`medium` is "around Embree's build
     /// time, faster traversal").
     ObvhsQuality { Fastest = "fastest", VeryFast = "very-fast", Fast = "fast", Medium = "medium", Slow = "slow", VerySlow = "very-slow", }
@@ -146,16 +164,18 @@ pub enum Accel {
 }
 
 impl Named for Accel {
-    const ALL: &'static [Self] = &[
-        Accel::Ours(AccelKind::List),
-        Accel::Ours(AccelKind::Bvh),
-        Accel::Ours(AccelKind::FlatBvh),
-        Accel::Ours(AccelKind::WideBvh),
-        Accel::Peer(PeerKind::ObvhsBvh2),
-        Accel::Peer(PeerKind::ObvhsCwbvh),
-        Accel::Peer(PeerKind::Embree),
-        Accel::Peer(PeerKind::EmbreePackets),
-    ];
+    /// The tracer's structures, then every peer: a peer is one entry in [`PeerKind`].
+    const ALL: &'static [Self] = &{
+        const OURS: &[AccelKind] = &AccelKind::ALL;
+        const PEERS: &[PeerKind] = <PeerKind as Named>::ALL;
+        let mut all = [Accel::Ours(AccelKind::List); OURS.len() + PEERS.len()];
+        let mut i = 0;
+        while i < all.len() {
+            all[i] = if i < OURS.len() { Accel::Ours(OURS[i]) } else { Accel::Peer(PEERS[i - OURS.len()]) };
+            i += 1;
+        }
+        all
+    };
     fn name(self) -> &'static str {
         match self {
             Accel::Ours(k) => k.name(),

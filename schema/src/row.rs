@@ -150,6 +150,13 @@ pub trait MeasureType {
     fn cell(&self) -> Cell;
 }
 
+impl MeasureType for crate::names::ValidationStatus {
+    const KIND: Kind = Kind::Text;
+    fn cell(&self) -> Cell {
+        Cell::Text(crate::Named::name(*self).to_string())
+    }
+}
+
 impl MeasureType for String {
     const KIND: Kind = Kind::Text;
     fn cell(&self) -> Cell {

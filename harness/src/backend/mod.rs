@@ -38,6 +38,11 @@ pub trait Backend: Sync {
     fn refuses(&self, _settings: &Settings) -> Option<(Axis, String)> {
         None
     }
+    /// False for a backend whose answers are not answers (the `null` backend): it is counted and timed, never
+    /// validated (`validation = unchecked`).
+    fn answers(&self) -> bool {
+        true
+    }
     /// True when it builds and traces on threads of its own whose limit is process-wide (Embree's TBB): each
     /// configuration is then timed in a worker process of its own, and built outside the harness's pool.
     fn own_threads(&self) -> bool {

@@ -203,22 +203,23 @@ pub fn timed(settings: &Settings, file: Option<&Scene>, rays: Option<&RaySet>, s
     })
 }
 
-/// Runs `settings` once with work counters (untimed): counters, output hash, and the ray-set answers of
+/// Runs `settings` once with work counters (untimed): counters, output hash, and (when asked for) the answers to
 /// `answer_rays` (the workload's own set, or the primary set for the render workload) for validation.
 pub fn counted(
     settings: &Settings,
     file: Option<&Scene>,
     rays: Option<&RaySet>,
-    answer_rays: &RaySet,
-) -> Result<(WorkCounters, u64, RayAnswers), Error> {
+    answer_rays: Option<&RaySet>,
+) -> Result<(WorkCounters, u64, Option<RayAnswers>), Error> {
     let scene = make_scene(settings, file);
     let setup = Setup::start(settings)?;
     let built = backend::of(settings.accel).build(settings, &scene.spheres, &setup)?;
     let (output, c) = setup.install(|| built.structure.run_counted(Work::new(&scene, settings, rays)));
     let hash = output.hash();
-    let answers = match (output, rays) {
-        (Output::Answers(a), Some(r)) if std::ptr::eq(r, answer_rays) => a,
-        _ => setup.install(|| built.structure.answers(answer_rays, &settings.strategy())),
+    let answers = match (output, rays, answer_rays) {
+        (_, _, None) => None,
+        (Output::Answers(a), Some(r), Some(want)) if std::ptr::eq(r, want) => Some(a),
+        (_, _, Some(want)) => Some(setup.install(|| built.structure.answers(want, &settings.strategy()))),
     };
     Ok((c, hash, answers))
 }

@@ -11,7 +11,7 @@ pub mod worker;
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
-use schema::{Row, Settings, Workload};
+use schema::{Row, Settings, ValidationStatus, Workload};
 use tracer::counters::WorkCounters;
 use tracer::rays::RaySet;
 
@@ -129,6 +129,7 @@ fn describe(c: &Configuration) -> String {
 /// What validation found for one configuration.
 #[derive(Clone, Debug)]
 struct Checked {
+    status: ValidationStatus,
     counters: WorkCounters,
     output_hash: u64,
     reference: &'static str,
@@ -158,11 +159,27 @@ pub fn worker_request(plan: &Plan, c: &Configuration) -> WorkerRequest {
 
 fn check(plan: &Plan, c: &Configuration, bank: &mut RayBank) -> Result<Checked, Error> {
     let rays = workload_rays(plan, &c.settings, bank);
+    if !backend::of(c.settings.accel).answers() {
+        let (counters, output_hash, _) = measure::counted(&c.settings, plan.scene_file(), rays.as_deref(), None)?;
+        return Ok(Checked {
+            status: ValidationStatus::Unchecked,
+            counters,
+            output_hash,
+            reference: "-",
+            mismatches: 0,
+            grazing: 0,
+            reference_checked: 0,
+            wrong_side: "-",
+            rays: 0,
+        });
+    }
     let reference = bank.reference(&c.settings, plan.scene_file(), c.settings.workload.validation_kind());
     let set = &reference.set;
-    let (counters, output_hash, answers) = measure::counted(&c.settings, plan.scene_file(), rays.as_deref(), set)?;
-    let judged = validate::judge(&reference, &answers);
+    let (counters, output_hash, answers) =
+        measure::counted(&c.settings, plan.scene_file(), rays.as_deref(), Some(set))?;
+    let judged = validate::judge(&reference, &answers.expect("answers were asked for"));
     Ok(Checked {
+        status: if judged.mismatches == 0 { ValidationStatus::Exact } else { ValidationStatus::Failed },
         counters,
         output_hash,
         reference: reference.name,
@@ -235,7 +252,7 @@ fn row(r: &Recording, c: &Configuration, rep: u32, t: &Timing, v: &Checked, star
     row.load_avg_1m = load;
     row.timestamp = timestamp;
     row.harness_version = p.harness_version.clone();
-    row.validation = if v.mismatches == 0 { "exact".into() } else { "FAILED".into() };
+    row.validation = v.status;
     row.validated_against = v.reference.to_string();
     row.mismatches = v.mismatches as u64;
     row.grazing = v.grazing as u64;
@@ -289,7 +306,7 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, existing: Existing) -> R
         recorded.iter().filter_map(|r| index.get(r.config_id.as_str()).map(|&i| (i, r))).collect();
     resumed.sort_by_key(|(i, r)| (*i, r.repetition));
     for (i, r) in resumed {
-        if r.validation == "FAILED" {
+        if r.validation == ValidationStatus::Failed {
             failed.insert(i);
         } else if done.insert((i, r.repetition)) {
             let c = &plan.configurations[i];
@@ -447,6 +464,7 @@ mod tests {
         let plan = Plan::new(&exp, 2).unwrap();
         let counters = WorkCounters { rays: 786_432, ..Default::default() };
         let v = Checked {
+            status: ValidationStatus::Failed,
             counters,
             output_hash: 1,
             reference: "reference",
@@ -460,7 +478,7 @@ mod tests {
         let recording = Recording { exp: &exp, provenance: &provenance, shard: None };
         let started = Started { load: 0.5, timestamp: "t".into() };
         let row = row(&recording, &plan.configurations[0], 0, &Timing::untimed(1), &v, started);
-        assert_eq!((row.validation.as_str(), row.mismatches), ("FAILED", 3));
+        assert_eq!((row.validation, row.mismatches), (ValidationStatus::Failed, 3));
         assert_eq!((row.grazing, row.reference_checked, row.wrong_side.as_str()), (2, 16_384, "backend"));
         let text = format!("{}\n{}", schema::row::header(), schema::row::csv_line(&row).unwrap());
         let back = &schema::row::read_rows(&text).unwrap()[0];
