@@ -75,6 +75,8 @@ named_enum! {
         Embree = "embree",
         /// Embree 4 queried in packets of 16 rays (`rtcIntersect16`) or 8 (`rtcIntersect8`), by `packet_size`.
         EmbreePackets = "embree-packets",
+        /// Not a peer: every ray misses at once, so its trace time is the harness's own cost per ray (never validated).
+        Null = "null",
     }
 }
 

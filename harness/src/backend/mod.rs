@@ -5,9 +5,11 @@
 //!
 //! - [`ours`]: the tracer's structures (list, pointer BVH, flat BVH, wide BVH);
 //! - [`obvhs`]: obvhs 0.4's BVH2 and CWBVH;
-//! - [`embree`]: Embree 4, single rays and packets, loaded at run time.
+//! - [`embree`]: Embree 4, single rays and packets, loaded at run time;
+//! - [`null`]: every ray misses at once: the harness's own cost per ray.
 
 mod embree;
+mod null;
 mod obvhs;
 mod ours;
 mod setup;
@@ -73,7 +75,7 @@ impl fmt::Display for Unavailable {
 }
 
 /// Every backend, in the order `harness list` shows them.
-pub const ALL: &[&dyn Backend] = &[&ours::Ours, &obvhs::Obvhs, &embree::Embree];
+pub const ALL: &[&dyn Backend] = &[&ours::Ours, &obvhs::Obvhs, &embree::Embree, &null::NullBackend];
 
 /// The backend that runs `accel`.
 pub fn of(accel: Accel) -> &'static dyn Backend {
