@@ -75,7 +75,7 @@ fn bad_configs_exit_2_with_one_line_and_write_nothing() {
         (
             "unknown accelerator",
             "name = \"t\"\n[sweep]\naccel = [\"bvh\", \"bhv\"]\n",
-            "sweep.accel[1]: unknown value \"bhv\" (allowed: list, bvh, flat-bvh, wide-bvh, obvhs-bvh2, obvhs-cwbvh, embree, embree-packets)",
+            "sweep.accel[1]: unknown value \"bhv\" (allowed: list, bvh, flat-bvh, wide-bvh, obvhs-bvh2, obvhs-cwbvh, embree, embree-packets, null)",
         ),
         (
             "zero threads",

@@ -104,6 +104,7 @@ named_enum! {
     }
 }
 
+#[allow(clippy::derivable_impls)]
 impl Default for ValidationStatus {
     fn default() -> Self {
         ValidationStatus::Unchecked
