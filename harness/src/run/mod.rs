@@ -5,27 +5,27 @@ mod adaptive;
 pub mod arbitrate;
 pub mod measure;
 pub mod provenance;
+mod sweep;
 pub mod validate;
 pub mod worker;
 
-use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 use schema::{Row, Settings, ValidationStatus, Workload};
 use tracer::counters::WorkCounters;
 use tracer::rays::RaySet;
 
-use crate::backend::{self, Setup};
+use crate::backend;
 use crate::config::Experiment;
 use crate::error::Error;
 use crate::output::Progress;
-use crate::plan::{Configuration, Plan};
+use crate::plan::{Configuration, Plan, PlannedRun};
 use crate::rows::RowLog;
-use adaptive::Sampler;
 use measure::Timing;
 use provenance::{Provenance, load_average_1m, timestamp_now};
+use sweep::Sweep;
 use validate::RayBank;
-use worker::{Worker, WorkerRequest};
+use worker::WorkerRequest;
 
 /// File names inside a run folder.
 pub const RUNS_CSV: &str = "runs.csv";
@@ -142,6 +142,25 @@ struct Checked {
     /// Whose answers f64 showed wrong: `-`, `backend`, `reference` or `both`.
     wrong_side: &'static str,
     rays: usize,
+}
+
+impl Checked {
+    /// The note for a configuration (`what`) that failed validation.
+    fn failure(&self, what: &str) -> String {
+        format!(
+            "VALIDATION FAILED: {what}: {} of {} rays disagree with {} beyond f64 brute force's tolerance ({} grazing \
+             tolerated); f64 shows the {} answers wrong; this configuration is not timed",
+            self.mismatches,
+            self.rays,
+            self.reference,
+            self.grazing,
+            match self.wrong_side {
+                "both" => "backend's and the reference's",
+                "reference" => "reference's",
+                _ => "backend's",
+            }
+        )
+    }
 }
 
 /// The ray set a configuration's workload traces (`None` for the render workload).
@@ -293,33 +312,12 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, existing: Existing) -> R
     let provenance = Provenance::collect();
     let recording = Recording { exp, provenance: &provenance, shard: plan.shard };
     let (mut log, recorded) = open_log(exp, dir, existing)?;
-    let metric_of = |c: &Configuration| {
-        report::spec::speedup_metric(exp.speedup_metric.as_deref(), schema::Named::name(c.settings.workload))
+    let mut append = |row: &Row| {
+        log.append(row).map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))
     };
-    let rule_of = |c: &Configuration| exp.repetitions.rule(metric_of(c));
-    // Recorded rows count as repetitions done (and, with "auto", as samples of their configuration).
-    let mut sampler = Sampler::new(exp.repetitions);
-    let mut failed: HashSet<usize> = HashSet::new();
-    let mut done: HashSet<(usize, u32)> = HashSet::new();
-    let index: HashMap<&str, usize> = plan.configurations.iter().enumerate().map(|(i, c)| (c.id.as_str(), i)).collect();
-    let mut resumed: Vec<(usize, &Row)> =
-        recorded.iter().filter_map(|r| index.get(r.config_id.as_str()).map(|&i| (i, r))).collect();
-    resumed.sort_by_key(|(i, r)| (*i, r.repetition));
-    for (i, r) in resumed {
-        if r.validation == ValidationStatus::Failed {
-            failed.insert(i);
-        } else if done.insert((i, r.repetition)) {
-            let c = &plan.configurations[i];
-            sampler.record(i, &c.id, adaptive::recorded_value(r, metric_of(c)));
-        }
-    }
-    let todo: Vec<_> = plan
-        .runs
-        .iter()
-        .filter(|r| !failed.contains(&r.config) && !sampler.is_done(r.config))
-        .filter(|r| r.repetition.is_none_or(|rep| !done.contains(&(r.config, rep))))
-        .filter(|r| r.repetition.is_some() || sampler.count(r.config) == 0)
-        .collect();
+    let mut sweep = Sweep::new(exp, plan);
+    sweep.resume(&recorded);
+    let todo: Vec<&PlannedRun> = plan.runs.iter().filter(|r| sweep.to_do(r)).collect();
     if !recorded.is_empty() {
         note!(
             "resuming {}: {} rows already recorded, at most {} runs to go",
@@ -328,130 +326,74 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, existing: Existing) -> R
             todo.len()
         );
     }
-    // Every configuration is timed in one process with one setup (its warm-ups first, then every repetition):
-    // A backend with threads of its own (Embree) in a worker process of its own, kept while its runs interleave
-    // with others'; the rest here.
-    let mut pending: HashMap<usize, Pending> = HashMap::new();
     for run in &todo {
-        let p = pending.entry(run.config).or_default();
-        if run.repetition.is_some() { p.repetitions += 1 } else { p.warmups += 1 }
+        sweep.states[run.config].pending.add(run);
     }
     let cores = crate::render::available_threads();
     let model = plan.configurations.iter().map(|c| crate::plan::estimate_seconds(&c.settings, cores)).collect();
     let mut progress = Progress::new(model);
-    progress.update(|config| pending.get(&config).map_or(0.0, |p| p.expected(&sampler, config)));
-    let mut workers: HashMap<usize, Worker> = HashMap::new();
-    let mut setups: HashMap<usize, Setup> = HashMap::new();
+    progress.update(|config| sweep.expected(config));
     let mut bank = RayBank::default();
-    let mut checked: HashMap<usize, Checked> = HashMap::new();
     for run in todo {
         let c = &plan.configurations[run.config];
-        if failed.contains(&run.config) || sampler.is_done(run.config) {
+        let (metric, rule) = (sweep.metric(c), sweep.rule(c));
+        let state = &mut sweep.states[run.config];
+        if state.failed || sweep.sampler.is_done(run.config) {
             continue;
         }
-        if let std::collections::hash_map::Entry::Vacant(e) = checked.entry(run.config) {
+        if state.checked.is_none() {
             let started = std::time::Instant::now();
             let v = check(plan, c, &mut bank)?;
             progress.validated(run.config, started.elapsed().as_secs_f64());
-            if v.mismatches > 0 {
-                note!(
-                    "VALIDATION FAILED: {}: {} of {} rays disagree with {} beyond f64 brute force's tolerance \
-                     ({} grazing tolerated); f64 shows the {} answers wrong; this configuration is not timed",
-                    describe(c),
-                    v.mismatches,
-                    v.rays,
-                    v.reference,
-                    v.grazing,
-                    match v.wrong_side {
-                        "both" => "backend's and the reference's",
-                        "reference" => "reference's",
-                        _ => "backend's",
-                    }
-                );
-                let untimed = Timing::untimed(v.output_hash);
-                let mut failed_row = row(&recording, c, 0, &untimed, &v, Started::now());
-                failed_row.repetition_rule = rule_of(c);
-                log.append(&failed_row)
-                    .map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))?;
-                failed.insert(run.config);
-                pending.remove(&run.config);
+            if v.status == ValidationStatus::Failed {
+                note!("{}", v.failure(&describe(c)));
+                let mut failed = row(&recording, c, 0, &Timing::untimed(v.output_hash), &v, Started::now());
+                failed.repetition_rule = rule;
+                append(&failed)?;
+                state.fail();
                 progress.untimed(&format!("{} FAILED validation", describe(c)));
-                progress.update(|config| pending.get(&config).map_or(0.0, |p| p.expected(&sampler, config)));
+                progress.update(|config| sweep.expected(config));
                 continue;
             }
-            e.insert(v);
+            state.checked = Some(v);
         }
         let started_run = Started::now();
         let started = std::time::Instant::now();
-        let timing = if backend::of(c.settings.accel).own_threads() {
-            if let std::collections::hash_map::Entry::Vacant(e) = workers.entry(run.config) {
-                let exe = std::env::current_exe()
-                    .map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
-                e.insert(Worker::start(&exe, None)?);
-            }
-            workers.get_mut(&run.config).expect("started above").time(&worker_request(plan, c))?
-        } else {
-            if let std::collections::hash_map::Entry::Vacant(e) = setups.entry(run.config) {
-                e.insert(Setup::start(&c.settings)?);
-            }
-            let rays = workload_rays(plan, &c.settings, &mut bank);
-            measure::timed(&c.settings, plan.scene_file(), rays.as_deref(), &setups[&run.config])?
-        };
-        let p = pending.get_mut(&run.config).expect("counted for every run to do");
-        if run.repetition.is_some() {
-            p.repetitions -= 1
-        } else {
-            p.warmups -= 1
-        }
+        let timing = state.time(plan, &mut bank)?;
+        state.pending.take(run);
         let what = match run.repetition {
             None => format!("{} warm-up", describe(c)),
             Some(rep) => {
-                let v = &checked[&run.config];
-                let hash = v.output_hash;
-                if hash != timing.output_hash {
+                let v = state.checked.clone().expect("checked before its first run");
+                if v.output_hash != timing.output_hash {
                     return Err(Error::Run(format!(
-                        "{}: the counted pass produced output {hash:016x} but the timed pass {:016x}: the tracer is not deterministic",
+                        "{}: the counted pass produced output {:016x} but the timed pass {:016x}: the tracer is not deterministic",
                         describe(c),
+                        v.output_hash,
                         timing.output_hash
                     )));
                 }
-                let mut recorded = row(&recording, c, rep, &timing, v, started_run);
-                recorded.repetition_rule = rule_of(c);
+                let mut recorded = row(&recording, c, rep, &timing, &v, started_run);
+                recorded.repetition_rule = rule;
                 recorded.interval_width =
-                    sampler.record(run.config, &c.id, adaptive::timed_value(&timing, metric_of(c)));
+                    sweep.sampler.record(run.config, &c.id, adaptive::timed_value(&timing, metric));
                 // Rounding is idempotent: the rest of the row was rounded by `row` already.
                 let recorded = recorded.rounded();
-                log.append(&recorded)
-                    .map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))?;
+                append(&recorded)?;
                 let width = recorded.interval_width.map_or(String::new(), |w| format!(" (interval ±{:.1}%)", w * 50.0));
                 format!("{} rep {rep}: {:.3} s{width}", describe(c), timing.total_s())
             }
         };
         // After a configuration's last run its worker process, pool and device go.
-        if p.warmups + p.repetitions == 0 || sampler.is_done(run.config) {
-            pending.remove(&run.config);
-            workers.remove(&run.config);
-            setups.remove(&run.config);
+        let state = &mut sweep.states[run.config];
+        if state.pending.is_empty() || sweep.sampler.is_done(run.config) {
+            state.finish();
         }
         progress.finished(run.config, started.elapsed().as_secs_f64(), &what);
-        progress.update(|config| pending.get(&config).map_or(0.0, |p| p.expected(&sampler, config)));
+        progress.update(|config| sweep.expected(config));
     }
     progress.finish();
     Ok(())
-}
-
-/// The runs of one configuration still in the plan.
-#[derive(Clone, Copy, Debug, Default)]
-struct Pending {
-    warmups: usize,
-    repetitions: usize,
-}
-
-impl Pending {
-    /// Runs still expected: the warm-ups, and the repetitions the sampler expects (at most those planned).
-    fn expected(&self, sampler: &Sampler, config: usize) -> f64 {
-        self.warmups as f64 + sampler.expected_left(config).min(self.repetitions as f64)
-    }
 }
 
 #[cfg(test)]
