@@ -24,6 +24,8 @@ pub mod traverse;
 
 use collapse::{Tree, collapse};
 use kernel::Query;
+#[cfg(target_arch = "x86_64")]
+use kernel::simd::Simd;
 use order::{ByOctant, Nearest, Order, Stored};
 use packet::{AnyPackets, ClosestPackets};
 use tile::{AnyTiles, ClosestTiles};
@@ -185,10 +187,10 @@ impl WideBvh {
         match self.kernel {
             // SAFETY: the kernel was validated as available on this CPU when it was chosen.
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 => unsafe { kernel::avx2::run::<Q, O, W, B>(query, tree) },
+            Kernel::Avx2 => unsafe { kernel::avx2::Avx2::run::<Q, O, W, B>(query, tree) },
             // SAFETY: as above.
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx512 => unsafe { kernel::avx512::run::<Q, O, W, B>(query, tree) },
+            Kernel::Avx512 => unsafe { kernel::avx512::Avx512::run::<Q, O, W, B>(query, tree) },
             _ => kernel::scalar::run::<Q, O, W, B>(query, tree),
         }
     }
