@@ -1,7 +1,8 @@
 //! `report::check` on synthetic rows: seeded noise around fixed medians, deterministic counters, instruction
 //! counts, one machine or two.
 
-use std::collections::BTreeMap;
+mod common;
+
 use std::path::PathBuf;
 
 use report::check::instructions::{self, InstructionCount};
@@ -164,18 +165,7 @@ fn run_dir(name: &str, runs: Option<&str>) -> PathBuf {
 }
 
 fn spec() -> ReportSpec {
-    let fixed: Vec<String> = schema::row::setting_names()
-        .into_iter()
-        .filter(|c| !["objects", "seed"].contains(c))
-        .map(String::from)
-        .collect();
-    ReportSpec {
-        name: "synthetic".into(),
-        reference: Some("brute".into()),
-        series: SERIES.iter().map(|s| s.0.to_string()).collect(),
-        series_fixed: SERIES.iter().map(|s| (s.0.to_string(), fixed.clone())).collect::<BTreeMap<_, _>>(),
-        ..ReportSpec::default()
-    }
+    common::spec("synthetic", "brute", &SERIES.map(|s| s.0))
 }
 
 /// Compares `new` (as the run) against `old` (as the baseline).

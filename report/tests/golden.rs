@@ -1,5 +1,7 @@
 //! Golden test: a small hand-made runs.csv with obvious medians, written into a temp dir.
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -52,20 +54,11 @@ fn plot(file: &str, title: &str, kind: PlotKind, x: &str, log: bool) -> PlotSpec
 }
 
 fn spec() -> ReportSpec {
-    let fixed: Vec<String> = schema::row::setting_names()
-        .into_iter()
-        .filter(|c| !["objects", "seed"].contains(c))
-        .map(String::from)
-        .collect();
     let mut paper_claim = claim("BVH is at least 2× faster than the list", faster(2.0, true), None);
     paper_claim.paper = Some("the BVH is much faster".into());
     ReportSpec {
-        name: "golden".into(),
         description: "Two series, two object counts, two seeds, three repetitions.".into(),
-        reference: Some(LIST.into()),
         speedup_metric: Some("total_s".into()),
-        series: vec![LIST.into(), BVH.into()],
-        series_fixed: BTreeMap::from([(LIST.to_string(), fixed.clone()), (BVH.to_string(), fixed)]),
         plots: vec![
             plot("total_vs_objects", "Total time vs objects", PlotKind::Metric, "objects", true),
             plot("speedup", "Speedup vs objects", PlotKind::Speedup, "objects", false),
@@ -85,6 +78,7 @@ fn spec() -> ReportSpec {
         config_text: "name = \"golden\"\n[[series]]\nlabel = \"serial·list\"\n".into(),
         notes: vec!["a note from the harness".into()],
         warnings: vec![],
+        ..common::spec("golden", LIST, &[LIST, BVH])
     }
 }
 

@@ -1,23 +1,13 @@
 //! The speedup history: append runs, refuse duplicates, plot with regressions marked.
 
-use std::collections::BTreeMap;
+mod common;
+
 use std::path::Path;
 
 use report::spec::ReportSpec;
 
 fn spec() -> ReportSpec {
-    let fixed: Vec<String> = schema::row::setting_names()
-        .into_iter()
-        .filter(|c| !["objects", "seed"].contains(c))
-        .map(String::from)
-        .collect();
-    ReportSpec {
-        name: "golden".into(),
-        reference: Some("serial·list".into()),
-        series: vec!["serial·list".into(), "serial·bvh".into()],
-        series_fixed: BTreeMap::from([("serial·list".to_string(), fixed.clone()), ("serial·bvh".to_string(), fixed)]),
-        ..Default::default()
-    }
+    common::spec("golden", "serial·list", &["serial·list", "serial·bvh"])
 }
 
 #[test]

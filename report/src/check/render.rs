@@ -137,6 +137,20 @@ fn percent(ratio: f64) -> String {
     format!("{:+.1}%", (ratio - 1.0) * 100.0)
 }
 
+/// A table's configuration cell: its id, series and settings.
+fn configuration(id: &str, series: &str, settings: &str) -> String {
+    format!("`{id}` {}, {}", cell(series), cell(settings))
+}
+
+/// Writes one table row of `cells`.
+fn row(md: &mut String, cells: &[&str]) {
+    md.push('|');
+    for c in cells {
+        let _ = write!(md, " {c} |");
+    }
+    md.push('\n');
+}
+
 /// The counter table, or a line saying every common configuration's counters are identical.
 fn counter_table(md: &mut String, outcome: &CheckOutcome) {
     if outcome.counter_changes.is_empty() {
@@ -145,16 +159,8 @@ fn counter_table(md: &mut String, outcome: &CheckOutcome) {
     }
     md.push_str("| configuration | column | old → new |\n|---|---|---|\n");
     for c in &outcome.counter_changes {
-        let _ = writeln!(
-            md,
-            "| `{}` {}, {} | {} | {} → {} |",
-            c.config_id,
-            cell(&c.series),
-            cell(&c.settings),
-            c.column,
-            cell(&c.old),
-            cell(&c.new)
-        );
+        let change = format!("{} → {}", cell(&c.old), cell(&c.new));
+        row(md, &[&configuration(&c.config_id, &c.series, &c.settings), &c.column, &change]);
     }
     md.push('\n');
 }
@@ -227,20 +233,19 @@ fn time_table(md: &mut String, outcome: &CheckOutcome) {
             || if t.flagged() { "not measured again".to_string() } else { "—".to_string() },
             |c| format!("{}, {}, {}", num(c.new.value), interval(&c.ratio), verdict(c)),
         );
-        let _ = writeln!(
+        row(
             md,
-            "| `{}` {}, {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-            t.config_id,
-            cell(&t.series),
-            cell(&t.settings),
-            t.metric,
-            cell(&t.threads),
-            interval(&t.first.old),
-            interval(&t.first.new),
-            interval(&t.first.ratio),
-            verdict(&t.first),
-            if t.gating { "yes" } else { "no" },
-            again
+            &[
+                &configuration(&t.config_id, &t.series, &t.settings),
+                t.metric,
+                &cell(&t.threads),
+                &interval(&t.first.old),
+                &interval(&t.first.new),
+                &interval(&t.first.ratio),
+                verdict(&t.first),
+                if t.gating { "yes" } else { "no" },
+                &again,
+            ],
         );
     }
     md.push('\n');

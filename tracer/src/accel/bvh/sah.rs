@@ -31,19 +31,8 @@ impl SahCosts {
         self.intersection * count as f32
     }
 
-    /// Expected cost of splitting a node of surface area `parent_area` into the two given children.
-    pub fn split_cost(
-        &self,
-        parent_area: f32,
-        left_area: f32,
-        left_count: usize,
-        right_area: f32,
-        right_count: usize,
-    ) -> f32 {
-        self.split_cost_of_key(parent_area, left_area * left_count as f32 + right_area * right_count as f32)
-    }
-
-    /// [`SahCosts::split_cost`] from its children's term `key = left_area * left_count + right_area * right_count`.
+    /// Expected cost of splitting a node of surface area `parent_area` into two children whose term is
+    /// `key = left_area * left_count + right_area * right_count`.
     ///
     /// Every step is monotone, so the cost is non-decreasing in `key`: a candidate whose key is not below another's
     /// cannot cost less, and a split search can skip computing its cost.
@@ -74,7 +63,7 @@ impl Hash for SahCosts {
 ///
 /// A leaf of `n` spheres costs `intersection * ceil(n / block)` and a split counts each child's spheres the same
 /// way (tinybvh rounds leaf sizes up to its SIMD width in the SAH). With `block = 1` (every tree but the wide
-/// BVH) both costs are bit-identical to [`SahCosts::leaf_cost`] and [`SahCosts::split_cost`].
+/// BVH) both costs are bit-identical to [`SahCosts::leaf_cost`] and [`SahCosts::split_cost_of_key`] of plain counts.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CostModel {
     /// The cost constants.
@@ -106,7 +95,7 @@ impl CostModel {
         right_area: f32,
         right_count: usize,
     ) -> f32 {
-        self.costs.split_cost(parent_area, left_area, self.blocks(left_count), right_area, self.blocks(right_count))
+        self.split_cost_of_key(parent_area, self.split_key(left_area, left_count, right_area, right_count))
     }
 
     /// [`CostModel::split_cost`] from [`CostModel::split_key`]'s term.

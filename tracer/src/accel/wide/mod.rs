@@ -24,9 +24,11 @@ pub mod traverse;
 
 use collapse::{Tree, collapse};
 use kernel::Query;
+#[cfg(target_arch = "x86_64")]
+use kernel::simd::Simd;
 use order::{ByOctant, Nearest, Order, Stored};
-use packet::{AnyPackets, ClosestPackets};
-use tile::{AnyTiles, ClosestTiles};
+use packet::Packets;
+use tile::Tiles;
 use traverse::{Any, AnyBatch, Closest, ClosestBatch};
 
 pub use params::{ChildOrdering, Kernel, WideParams};
@@ -185,10 +187,10 @@ impl WideBvh {
         match self.kernel {
             // SAFETY: the kernel was validated as available on this CPU when it was chosen.
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 => unsafe { kernel::avx2::run::<Q, O, W, B>(query, tree) },
+            Kernel::Avx2 => unsafe { kernel::avx2::Avx2::run::<Q, O, W, B>(query, tree) },
             // SAFETY: as above.
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx512 => unsafe { kernel::avx512::run::<Q, O, W, B>(query, tree) },
+            Kernel::Avx512 => unsafe { kernel::avx512::Avx512::run::<Q, O, W, B>(query, tree) },
             _ => kernel::scalar::run::<Q, O, W, B>(query, tree),
         }
     }
@@ -245,18 +247,18 @@ impl Accelerator for WideBvh {
 
     fn intersect_batch<C: Counters>(&self, rays: &[Ray], out: &mut [Hit], counters: &mut C) {
         match self.params.packet {
-            8 => self.dispatch_packets(ClosestPackets::<C, 8> { rays, out, counters }),
-            16 => self.dispatch_packets(ClosestPackets::<C, 16> { rays, out, counters }),
-            64 => self.dispatch_packets(ClosestTiles { rays, out, counters }),
+            8 => self.dispatch_packets(Packets::<C, _, 8> { rays, out, counters }),
+            16 => self.dispatch_packets(Packets::<C, _, 16> { rays, out, counters }),
+            64 => self.dispatch_packets(Tiles { rays, out, counters }),
             _ => self.dispatch(ClosestBatch { rays, out, counters }),
         }
     }
 
     fn occluded_batch<C: Counters>(&self, rays: &[Ray], out: &mut [bool], counters: &mut C) {
         match self.params.packet {
-            8 => self.dispatch_packets(AnyPackets::<C, 8> { rays, out, counters }),
-            16 => self.dispatch_packets(AnyPackets::<C, 16> { rays, out, counters }),
-            64 => self.dispatch_packets(AnyTiles { rays, out, counters }),
+            8 => self.dispatch_packets(Packets::<C, _, 8> { rays, out, counters }),
+            16 => self.dispatch_packets(Packets::<C, _, 16> { rays, out, counters }),
+            64 => self.dispatch_packets(Tiles { rays, out, counters }),
             _ => self.dispatch(AnyBatch { rays, out, counters }),
         }
     }

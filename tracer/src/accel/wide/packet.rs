@@ -24,7 +24,7 @@ use std::mem::MaybeUninit;
 use super::collapse::Tree;
 use super::kernel::{Ops, Query};
 use super::leaf::PAD;
-use super::node::ChildRef;
+use super::node::{ChildRef, WideNode};
 use super::order::Order;
 use super::ray::RayLanes;
 use crate::accel::Hit;
@@ -153,72 +153,125 @@ pub(super) fn still_wanted<const P: usize>(mask: u64, t: f32, t_max: &[f32; P]) 
     bits(mask).filter(|&i| t < t_max[i] * CULL_SLACK).fold(0, |m, i| m | 1 << i)
 }
 
-/// Box-tests `node`'s children for the `active` rays and pushes every child entered, nearest on top.
-///
-/// # Safety
-/// The CPU supports `K`'s instructions; `node` is a node of `tree`.
-#[inline(always)]
-unsafe fn enter<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
-    tree: &Tree<W, B>,
-    node: ChildRef,
-    active: u64,
-    packet: &Packet<P>,
-    stack: &mut Stack,
-    counters: &mut C,
-) {
-    debug_assert!(node.index() < tree.nodes.len());
-    // SAFETY: node references come from the collapse, which emits every node it refers to.
-    let node = unsafe { tree.nodes.get_unchecked(node.index()) };
-    let mut entered = [0u64; W];
-    let mut nearest = [f32::INFINITY; W];
-    let mut dist = [0.0f32; W];
-    for i in bits(active) {
-        counters.node_visit();
-        if C::ENABLED {
-            counters.box_tests(node.len() as u32);
-        }
-        // SAFETY: forwarded from the caller.
-        let hits = unsafe { K::boxes(node, &packet.lanes[i], packet.t_max[i] * CULL_SLACK, &mut dist) };
-        for lane in bits(hits as u64) {
-            entered[lane] |= 1 << i;
-            nearest[lane] = nearest[lane].min(dist[lane]);
-        }
+/// How a packet enters a node: every active ray box-tests the children ([`Masked`]), or the tile packets' frustum
+/// and ranges ([`super::tile`]).
+pub(super) trait Enter<const P: usize> {
+    /// Tests the children of the node of `at` for its `active` rays and pushes every child some ray enters, nearest
+    /// on top.
+    ///
+    /// # Safety
+    /// The CPU supports `K`'s instructions.
+    unsafe fn enter<K: Ops, C: Counters, const W: usize>(&self, at: Visit<'_, W, P>, counters: &mut C);
+
+    /// Some ray's closest hit got nearer: `t_max` holds the rays' new bounds.
+    #[inline(always)]
+    fn nearer(&mut self, _t_max: &[f32; P]) {}
+}
+
+/// A node the packet enters: the node, the rays that reached it, the packet, and the stack its children go on.
+pub(super) struct Visit<'a, const W: usize, const P: usize> {
+    pub(super) node: &'a WideNode<W>,
+    pub(super) active: u64,
+    pub(super) packet: &'a Packet<P>,
+    pub(super) stack: &'a mut Stack,
+}
+
+impl<'a, const W: usize, const P: usize> Visit<'a, W, P> {
+    /// Visits node `node` of `tree`.
+    ///
+    /// # Safety
+    /// `node` is a node of `tree`.
+    #[inline(always)]
+    unsafe fn new<const B: usize>(
+        tree: &'a Tree<W, B>,
+        node: ChildRef,
+        active: u64,
+        packet: &'a Packet<P>,
+        stack: &'a mut Stack,
+    ) -> Self {
+        debug_assert!(node.index() < tree.nodes.len());
+        // SAFETY: node references come from the collapse, which emits every node it refers to.
+        let node = unsafe { tree.nodes.get_unchecked(node.index()) };
+        Self { node, active, packet, stack }
     }
-    let base = stack.len;
-    for lane in 0..W {
-        if entered[lane] != 0 {
-            stack.insert_sorted(base, Entry { child: node.children[lane], rays: entered[lane], t: nearest[lane] });
+}
+
+/// Every active ray box-tests the node's children; each child is pushed with the rays that entered it.
+pub(super) struct Masked;
+
+impl<const P: usize> Enter<P> for Masked {
+    #[inline(always)]
+    unsafe fn enter<K: Ops, C: Counters, const W: usize>(&self, at: Visit<'_, W, P>, counters: &mut C) {
+        let Visit { node, active, packet, stack } = at;
+        let mut entered = [0u64; W];
+        let mut nearest = [f32::INFINITY; W];
+        let mut dist = [0.0f32; W];
+        for i in bits(active) {
+            counters.node_visit();
+            if C::ENABLED {
+                counters.box_tests(node.len() as u32);
+            }
+            // SAFETY: forwarded from the caller.
+            let hits = unsafe { K::boxes(node, &packet.lanes[i], packet.t_max[i] * CULL_SLACK, &mut dist) };
+            for lane in bits(hits as u64) {
+                entered[lane] |= 1 << i;
+                nearest[lane] = nearest[lane].min(dist[lane]);
+            }
+        }
+        let base = stack.len;
+        for lane in 0..W {
+            if entered[lane] != 0 {
+                stack.insert_sorted(base, Entry { child: node.children[lane], rays: entered[lane], t: nearest[lane] });
+            }
         }
     }
 }
 
-/// Nearest hits of the packet's first `out.len()` rays (1..=P) into `out`.
-///
-/// # Safety
-/// The CPU supports `K`'s instructions.
-#[inline(always)]
-pub(super) unsafe fn closest<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
-    tree: &Tree<W, B>,
-    packet: &mut Packet<P>,
-    out: &mut [Hit],
-    counters: &mut C,
-) {
-    let mut stack = Stack::new();
-    stack.insert_sorted(0, Entry { child: ChildRef::ROOT, rays: all(out.len()), t: f32::NEG_INFINITY });
-    while let Some(e) = stack.pop() {
-        let active = still_wanted(e.rays, e.t, &packet.t_max);
-        if active == 0 {
-            continue;
-        }
-        if e.child.is_node() {
+/// What a packet traversal answers for each ray: its nearest hit ([`Hit`]) or whether it is occluded (`bool`).
+pub(super) trait Answer: Sized {
+    /// Traverses `tree` with the packet's first `out.len()` rays (1..=P), entering nodes by `enter`, and writes
+    /// their answers into `out`.
+    ///
+    /// # Safety
+    /// The CPU supports `K`'s instructions.
+    unsafe fn traverse<K: Ops, C: Counters, E: Enter<P>, const W: usize, const B: usize, const P: usize>(
+        tree: &Tree<W, B>,
+        packet: &mut Packet<P>,
+        enter: E,
+        out: &mut [Self],
+        counters: &mut C,
+    );
+}
+
+/// Nearest hits ([`PrimaryHits::MISS`] for misses).
+impl Answer for Hit {
+    #[inline(always)]
+    unsafe fn traverse<K: Ops, C: Counters, E: Enter<P>, const W: usize, const B: usize, const P: usize>(
+        tree: &Tree<W, B>,
+        packet: &mut Packet<P>,
+        mut enter: E,
+        out: &mut [Hit],
+        counters: &mut C,
+    ) {
+        let mut stack = Stack::new();
+        stack.insert_sorted(0, Entry { child: ChildRef::ROOT, rays: all(out.len()), t: f32::NEG_INFINITY });
+        while let Some(e) = stack.pop() {
+            let active = still_wanted(e.rays, e.t, &packet.t_max);
+            if active == 0 {
+                continue;
+            }
+            if e.child.is_node() {
+                // SAFETY: forwarded from the caller.
+                unsafe { enter.enter::<K, C, W>(Visit::new(tree, e.child, active, packet, &mut stack), counters) };
+                continue;
+            }
             // SAFETY: forwarded from the caller.
-            unsafe { enter::<K, C, W, B, P>(tree, e.child, active, packet, &mut stack, counters) };
-            continue;
+            if unsafe { leaf_closest::<K, C, W, B, P>(tree, e.child, active, packet, counters) } {
+                enter.nearer(&packet.t_max);
+            }
         }
-        // SAFETY: forwarded from the caller.
-        unsafe { leaf_closest::<K, C, W, B, P>(tree, e.child, active, packet, counters) };
+        packet.write_closest(out);
     }
-    packet.write_closest(out);
 }
 
 /// The `active` rays test the blocks of `leaf`, each keeping a nearer hit; true when some ray's hit got nearer.
@@ -226,7 +279,7 @@ pub(super) unsafe fn closest<K: Ops, C: Counters, const W: usize, const B: usize
 /// # Safety
 /// The CPU supports `K`'s instructions; `leaf` is a leaf of `tree`.
 #[inline(always)]
-pub(super) unsafe fn leaf_closest<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
+unsafe fn leaf_closest<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
     tree: &Tree<W, B>,
     leaf: ChildRef,
     active: u64,
@@ -257,7 +310,7 @@ pub(super) unsafe fn leaf_closest<K: Ops, C: Counters, const W: usize, const B: 
 /// # Safety
 /// The CPU supports `K`'s instructions; `leaf` is a leaf of `tree`.
 #[inline(always)]
-pub(super) unsafe fn leaf_any<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
+unsafe fn leaf_any<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
     tree: &Tree<W, B>,
     leaf: ChildRef,
     active: u64,
@@ -280,68 +333,53 @@ pub(super) unsafe fn leaf_any<K: Ops, C: Counters, const W: usize, const B: usiz
     unoccluded
 }
 
-/// Writes the occlusion of the first `out.len()` rays: occluded unless their bit of `unoccluded` is set.
-#[inline(always)]
-pub(super) fn write_occluded(unoccluded: u64, out: &mut [bool]) {
-    for (i, o) in out.iter_mut().enumerate() {
-        *o = unoccluded >> i & 1 == 0;
-    }
-}
-
-/// Occlusion of the packet's first `out.len()` rays (1..=P) into `out`.
-///
-/// # Safety
-/// The CPU supports `K`'s instructions.
-#[inline(always)]
-pub(super) unsafe fn any<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
-    tree: &Tree<W, B>,
-    packet: &Packet<P>,
-    out: &mut [bool],
-    counters: &mut C,
-) {
-    let mut unoccluded = all(out.len());
-    let mut stack = Stack::new();
-    stack.insert_sorted(0, Entry { child: ChildRef::ROOT, rays: unoccluded, t: f32::NEG_INFINITY });
-    while let Some(e) = stack.pop() {
-        let active = e.rays & unoccluded;
-        if active == 0 {
-            continue;
-        }
-        if e.child.is_node() {
+/// Occlusion: a ray is dropped from the packet at its first hit, and the traversal ends when none is left.
+impl Answer for bool {
+    #[inline(always)]
+    unsafe fn traverse<K: Ops, C: Counters, E: Enter<P>, const W: usize, const B: usize, const P: usize>(
+        tree: &Tree<W, B>,
+        packet: &mut Packet<P>,
+        enter: E,
+        out: &mut [bool],
+        counters: &mut C,
+    ) {
+        let mut unoccluded = all(out.len());
+        let mut stack = Stack::new();
+        stack.insert_sorted(0, Entry { child: ChildRef::ROOT, rays: unoccluded, t: f32::NEG_INFINITY });
+        while let Some(e) = stack.pop() {
+            let active = e.rays & unoccluded;
+            if active == 0 {
+                continue;
+            }
+            if e.child.is_node() {
+                // SAFETY: forwarded from the caller.
+                unsafe { enter.enter::<K, C, W>(Visit::new(tree, e.child, active, packet, &mut stack), counters) };
+                continue;
+            }
             // SAFETY: forwarded from the caller.
-            unsafe { enter::<K, C, W, B, P>(tree, e.child, active, packet, &mut stack, counters) };
-            continue;
+            unoccluded = unsafe { leaf_any::<K, C, W, B, P>(tree, e.child, active, unoccluded, packet, counters) };
+            if unoccluded == 0 {
+                break;
+            }
         }
-        // SAFETY: forwarded from the caller.
-        unoccluded = unsafe { leaf_any::<K, C, W, B, P>(tree, e.child, active, unoccluded, packet, counters) };
-        if unoccluded == 0 {
-            break;
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = unoccluded >> i & 1 == 0;
         }
     }
-    write_occluded(unoccluded, out);
 }
 
-/// Nearest hits of a batch in packets of `P` ([`PrimaryHits::MISS`] for misses), one `ray` count per ray.
-pub struct ClosestPackets<'a, C, const P: usize> {
+/// A batch in packets of `P`, one `ray` count per ray: nearest hits into `out: &mut [Hit]`
+/// ([`PrimaryHits::MISS`] for misses) or occlusion into `out: &mut [bool]`.
+pub struct Packets<'a, C, A, const P: usize> {
     /// The rays.
     pub rays: &'a [Ray],
     /// One answer per ray.
-    pub out: &'a mut [Hit],
+    pub out: &'a mut [A],
     /// Where their work is counted.
     pub counters: &'a mut C,
 }
 
-/// Occlusion of a batch in packets of `P`, one `ray` count per ray.
-pub struct AnyPackets<'a, C, const P: usize> {
-    /// The rays.
-    pub rays: &'a [Ray],
-    /// One answer per ray.
-    pub out: &'a mut [bool],
-    /// Where their work is counted.
-    pub counters: &'a mut C,
-}
-
-impl<C: Counters, const P: usize> Query for ClosestPackets<'_, C, P> {
+impl<C: Counters, A: Answer, const P: usize> Query for Packets<'_, C, A, P> {
     type Out = ();
     #[inline(always)]
     unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) {
@@ -351,22 +389,7 @@ impl<C: Counters, const P: usize> Query for ClosestPackets<'_, C, P> {
             (0..rays.len()).for_each(|_| self.counters.ray());
             packet.load(rays);
             // SAFETY: forwarded from the caller.
-            unsafe { closest::<K, C, W, B, P>(tree, &mut packet, out, self.counters) };
-        }
-    }
-}
-
-impl<C: Counters, const P: usize> Query for AnyPackets<'_, C, P> {
-    type Out = ();
-    #[inline(always)]
-    unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) {
-        const { assert!(P <= 64, "the active mask is a u64") };
-        let mut packet = Packet::empty();
-        for (rays, out) in self.rays.chunks(P).zip(self.out.chunks_mut(P)) {
-            (0..rays.len()).for_each(|_| self.counters.ray());
-            packet.load(rays);
-            // SAFETY: forwarded from the caller.
-            unsafe { any::<K, C, W, B, P>(tree, &packet, out, self.counters) };
+            unsafe { A::traverse::<K, C, _, W, B, P>(tree, &mut packet, Masked, out, self.counters) };
         }
     }
 }

@@ -27,11 +27,9 @@
 
 use super::collapse::Tree;
 use super::kernel::{Ops, Query};
-use super::node::ChildRef;
 use super::order::Order;
-use super::packet::{self, CULL_SLACK, Entry, Packet, Stack, all, bits, still_wanted};
+use super::packet::{Answer, CULL_SLACK, Enter, Entry, Masked, Packet, Visit, bits};
 use super::ray::FrustumLanes;
-use crate::accel::Hit;
 use crate::counters::Counters;
 use crate::geometry::Ray;
 
@@ -46,167 +44,95 @@ fn range(first: u64, last: u64) -> u64 {
     (u64::MAX >> (63 - hi)) & (u64::MAX << lo)
 }
 
-/// Tests `node`'s children with the frustum, then ranges the `active` rays over the children it keeps, and pushes
-/// every child some ray enters, nearest on top.
-///
-/// # Safety
-/// The CPU supports `K`'s instructions; `node` is a node of `tree`.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-unsafe fn enter<K: Ops, C: Counters, const W: usize, const B: usize>(
-    tree: &Tree<W, B>,
-    node: ChildRef,
-    active: u64,
-    packet: &Packet<TILE_RAYS>,
-    frustum: &FrustumLanes,
-    t_far: f32,
-    stack: &mut Stack,
-    counters: &mut C,
-) {
-    debug_assert!(node.index() < tree.nodes.len());
-    // SAFETY: node references come from the collapse, which emits every node it refers to.
-    let node = unsafe { tree.nodes.get_unchecked(node.index()) };
-    counters.node_visit();
-    counters.box_tests(W as u32);
-    let mut entry = [0.0f32; W];
-    // SAFETY: forwarded from the caller.
-    let kept = unsafe { K::frustum_boxes(node, frustum, t_far, &mut entry) };
-    if kept == 0 {
-        return;
-    }
-    let mut dist = [0.0f32; W];
-    // Not a closure: closures do not inherit the kernel's target features, and the tests would not inline.
-    macro_rules! test {
-        ($i:expr) => {{
-            counters.box_tests(W as u32);
-            // SAFETY: forwarded from the caller.
-            unsafe { K::boxes(node, &packet.lanes[$i], packet.t_max[$i] * CULL_SLACK, &mut dist) }
-        }};
-    }
-    // First rays, in order: `first[lane]` gets the ray's bit.
-    let (mut first, mut last) = ([0u64; W], [0u64; W]);
-    let mut unfound = kept;
-    for i in bits(active) {
-        let hits = test!(i) & unfound;
-        for lane in bits(hits as u64) {
-            first[lane] = 1 << i;
-        }
-        unfound &= !hits;
-        if unfound == 0 {
-            break;
-        }
-    }
-    let entered = kept & !unfound;
-    // Last rays, in reverse order.
-    let mut unfound = entered;
-    let mut rest = active;
-    while unfound != 0 && rest != 0 {
-        let i = 63 - rest.leading_zeros() as usize;
-        rest &= !(1 << i);
-        let hits = test!(i) & unfound;
-        for lane in bits(hits as u64) {
-            last[lane] = 1 << i;
-        }
-        unfound &= !hits;
-    }
-    let base = stack.len;
-    for lane in bits(entered as u64) {
-        let rays = active & range(first[lane], last[lane]);
-        stack.insert_sorted(base, Entry { child: node.children[lane], rays, t: entry[lane] });
-    }
-}
-
 /// The largest `t_max` of the packet's rays, widened as the per-ray tests widen theirs.
 #[inline(always)]
 fn farthest(t_max: &[f32; TILE_RAYS]) -> f32 {
     t_max.iter().fold(f32::NEG_INFINITY, |m, &t| if t > m { t } else { m }) * CULL_SLACK
 }
 
-/// Nearest hits of up to [`TILE_RAYS`] rays into `out`.
-///
-/// # Safety
-/// The CPU supports `K`'s instructions.
-#[inline(always)]
-unsafe fn closest<K: Ops, C: Counters, const W: usize, const B: usize>(
-    tree: &Tree<W, B>,
-    packet: &mut Packet<TILE_RAYS>,
-    frustum: &FrustumLanes,
-    out: &mut [Hit],
-    counters: &mut C,
-) {
-    let mut t_far = farthest(&packet.t_max);
-    let mut stack = Stack::new();
-    stack.insert_sorted(0, Entry { child: ChildRef::ROOT, rays: all(out.len()), t: f32::NEG_INFINITY });
-    while let Some(e) = stack.pop() {
-        let active = still_wanted(e.rays, e.t, &packet.t_max);
-        if active == 0 {
-            continue;
-        }
-        if e.child.is_node() {
-            // SAFETY: forwarded from the caller.
-            unsafe { enter::<K, C, W, B>(tree, e.child, active, packet, frustum, t_far, &mut stack, counters) };
-            continue;
-        }
-        // SAFETY: forwarded from the caller.
-        if unsafe { packet::leaf_closest::<K, C, W, B, TILE_RAYS>(tree, e.child, active, packet, counters) } {
-            t_far = farthest(&packet.t_max);
-        }
-    }
-    packet.write_closest(out);
+/// Enters a node with the frustum, then ranges the active rays over the children it keeps (see the module docs).
+struct Ranged<'a> {
+    frustum: &'a FrustumLanes,
+    /// [`farthest`] of the packet's rays.
+    t_far: f32,
 }
 
-/// Occlusion of up to [`TILE_RAYS`] rays into `out`.
-///
-/// # Safety
-/// The CPU supports `K`'s instructions.
-#[inline(always)]
-unsafe fn any<K: Ops, C: Counters, const W: usize, const B: usize>(
-    tree: &Tree<W, B>,
-    packet: &Packet<TILE_RAYS>,
-    frustum: &FrustumLanes,
-    out: &mut [bool],
-    counters: &mut C,
-) {
-    let t_far = farthest(&packet.t_max);
-    let mut unoccluded = all(out.len());
-    let mut stack = Stack::new();
-    stack.insert_sorted(0, Entry { child: ChildRef::ROOT, rays: unoccluded, t: f32::NEG_INFINITY });
-    while let Some(e) = stack.pop() {
-        let active = e.rays & unoccluded;
-        if active == 0 {
-            continue;
-        }
-        if e.child.is_node() {
-            // SAFETY: forwarded from the caller.
-            unsafe { enter::<K, C, W, B>(tree, e.child, active, packet, frustum, t_far, &mut stack, counters) };
-            continue;
-        }
-        // SAFETY: forwarded from the caller.
-        unoccluded =
-            unsafe { packet::leaf_any::<K, C, W, B, TILE_RAYS>(tree, e.child, active, unoccluded, packet, counters) };
-        if unoccluded == 0 {
-            break;
-        }
+impl<'a> Ranged<'a> {
+    #[inline(always)]
+    fn new(frustum: &'a FrustumLanes, t_max: &[f32; TILE_RAYS]) -> Self {
+        Self { frustum, t_far: farthest(t_max) }
     }
-    packet::write_occluded(unoccluded, out);
 }
 
-/// Nearest hits of a batch in tile packets of [`TILE_RAYS`] consecutive rays, one `ray` count per ray.
-pub struct ClosestTiles<'a, C> {
+impl Enter<TILE_RAYS> for Ranged<'_> {
+    /// Tests the node's children with the frustum, then ranges the `active` rays over the children it keeps, and
+    /// pushes every child some ray enters, nearest on top.
+    #[inline(always)]
+    unsafe fn enter<K: Ops, C: Counters, const W: usize>(&self, at: Visit<'_, W, TILE_RAYS>, counters: &mut C) {
+        let Visit { node, active, packet, stack } = at;
+        counters.node_visit();
+        counters.box_tests(W as u32);
+        let mut entry = [0.0f32; W];
+        // SAFETY: forwarded from the caller.
+        let kept = unsafe { K::frustum_boxes(node, self.frustum, self.t_far, &mut entry) };
+        if kept == 0 {
+            return;
+        }
+        let mut dist = [0.0f32; W];
+        // Not a closure: closures do not inherit the kernel's target features, and the tests would not inline.
+        macro_rules! test {
+            ($i:expr) => {{
+                counters.box_tests(W as u32);
+                // SAFETY: forwarded from the caller.
+                unsafe { K::boxes(node, &packet.lanes[$i], packet.t_max[$i] * CULL_SLACK, &mut dist) }
+            }};
+        }
+        // First rays, in order: `first[lane]` gets the ray's bit.
+        let (mut first, mut last) = ([0u64; W], [0u64; W]);
+        let mut unfound = kept;
+        for i in bits(active) {
+            let hits = test!(i) & unfound;
+            for lane in bits(hits as u64) {
+                first[lane] = 1 << i;
+            }
+            unfound &= !hits;
+            if unfound == 0 {
+                break;
+            }
+        }
+        let entered = kept & !unfound;
+        // Last rays, in reverse order.
+        let mut unfound = entered;
+        let mut rest = active;
+        while unfound != 0 && rest != 0 {
+            let i = 63 - rest.leading_zeros() as usize;
+            rest &= !(1 << i);
+            let hits = test!(i) & unfound;
+            for lane in bits(hits as u64) {
+                last[lane] = 1 << i;
+            }
+            unfound &= !hits;
+        }
+        let base = stack.len;
+        for lane in bits(entered as u64) {
+            let rays = active & range(first[lane], last[lane]);
+            stack.insert_sorted(base, Entry { child: node.children[lane], rays, t: entry[lane] });
+        }
+    }
+
+    #[inline(always)]
+    fn nearer(&mut self, t_max: &[f32; TILE_RAYS]) {
+        self.t_far = farthest(t_max);
+    }
+}
+
+/// A batch in tile packets of [`TILE_RAYS`] consecutive rays, one `ray` count per ray: nearest hits into
+/// `out: &mut [Hit]` or occlusion into `out: &mut [bool]`.
+pub struct Tiles<'a, C, A> {
     /// The rays.
     pub rays: &'a [Ray],
     /// One answer per ray.
-    pub out: &'a mut [Hit],
-    /// Where their work is counted.
-    pub counters: &'a mut C,
-}
-
-/// Occlusion of a batch in tile packets of [`TILE_RAYS`] consecutive rays, one `ray` count per ray.
-pub struct AnyTiles<'a, C> {
-    /// The rays.
-    pub rays: &'a [Ray],
-    /// One answer per ray.
-    pub out: &'a mut [bool],
+    pub out: &'a mut [A],
     /// Where their work is counted.
     pub counters: &'a mut C,
 }
@@ -216,40 +142,29 @@ pub struct AnyTiles<'a, C> {
 /// Each is run through [`Ops::run_apart`], in a function of its own: compiled into one function, the two
 /// traversals made the ranged one 1.4–1.7× slower on primary rays (1e5 and 1e3 spheres), though it is the one
 /// that runs for nearly every tile.
-struct OnePacket<'a, C, O, const RANGED: bool> {
+struct OnePacket<'a, C, A, const RANGED: bool> {
     packet: &'a mut Packet<TILE_RAYS>,
     frustum: &'a FrustumLanes,
-    out: O,
+    out: &'a mut [A],
     counters: &'a mut C,
 }
 
-impl<C: Counters, const RANGED: bool> Query for OnePacket<'_, C, &mut [Hit], RANGED> {
+impl<C: Counters, A: Answer, const RANGED: bool> Query for OnePacket<'_, C, A, RANGED> {
     type Out = ();
     #[inline(always)]
     unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) {
+        let (packet, out, counters) = (self.packet, self.out, self.counters);
         // SAFETY (both): forwarded from the caller.
         if RANGED {
-            unsafe { closest::<K, C, W, B>(tree, self.packet, self.frustum, self.out, self.counters) }
+            let ranged = Ranged::new(self.frustum, &packet.t_max);
+            unsafe { A::traverse::<K, C, _, W, B, TILE_RAYS>(tree, packet, ranged, out, counters) }
         } else {
-            unsafe { packet::closest::<K, C, W, B, TILE_RAYS>(tree, self.packet, self.out, self.counters) }
+            unsafe { A::traverse::<K, C, _, W, B, TILE_RAYS>(tree, packet, Masked, out, counters) }
         }
     }
 }
 
-impl<C: Counters, const RANGED: bool> Query for OnePacket<'_, C, &mut [bool], RANGED> {
-    type Out = ();
-    #[inline(always)]
-    unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) {
-        // SAFETY (both): forwarded from the caller.
-        if RANGED {
-            unsafe { any::<K, C, W, B>(tree, self.packet, self.frustum, self.out, self.counters) }
-        } else {
-            unsafe { packet::any::<K, C, W, B, TILE_RAYS>(tree, self.packet, self.out, self.counters) }
-        }
-    }
-}
-
-impl<C: Counters> Query for ClosestTiles<'_, C> {
+impl<C: Counters, A: Answer> Query for Tiles<'_, C, A> {
     type Out = ();
     #[inline(always)]
     unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) {
@@ -261,29 +176,9 @@ impl<C: Counters> Query for ClosestTiles<'_, C> {
             let counters = &mut *self.counters;
             // SAFETY (both): forwarded from the caller.
             if frustum.is_one_octant() {
-                unsafe { K::run_apart::<_, O, W, B>(OnePacket::<C, _, true> { packet, frustum, out, counters }, tree) }
+                unsafe { K::run_apart::<_, O, W, B>(OnePacket::<C, A, true> { packet, frustum, out, counters }, tree) }
             } else {
-                unsafe { K::run_apart::<_, O, W, B>(OnePacket::<C, _, false> { packet, frustum, out, counters }, tree) }
-            }
-        }
-    }
-}
-
-impl<C: Counters> Query for AnyTiles<'_, C> {
-    type Out = ();
-    #[inline(always)]
-    unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) {
-        let packet = &mut Packet::empty();
-        for (rays, out) in self.rays.chunks(TILE_RAYS).zip(self.out.chunks_mut(TILE_RAYS)) {
-            (0..rays.len()).for_each(|_| self.counters.ray());
-            packet.load(rays);
-            let frustum = &FrustumLanes::new(&packet.lanes[..rays.len()]);
-            let counters = &mut *self.counters;
-            // SAFETY (both): forwarded from the caller.
-            if frustum.is_one_octant() {
-                unsafe { K::run_apart::<_, O, W, B>(OnePacket::<C, _, true> { packet, frustum, out, counters }, tree) }
-            } else {
-                unsafe { K::run_apart::<_, O, W, B>(OnePacket::<C, _, false> { packet, frustum, out, counters }, tree) }
+                unsafe { K::run_apart::<_, O, W, B>(OnePacket::<C, A, false> { packet, frustum, out, counters }, tree) }
             }
         }
     }
@@ -293,7 +188,7 @@ impl<C: Counters> Query for AnyTiles<'_, C> {
 mod tests {
     use super::*;
     use crate::accel::wide::kernel::scalar::Scalar;
-    use crate::accel::wide::node::WideNode;
+    use crate::accel::wide::node::{ChildRef, WideNode};
     use crate::accel::wide::ray::RayLanes;
     use crate::geometry::Aabb;
     use crate::rng::SplitMix64;
