@@ -1,5 +1,6 @@
 //! `harness baseline save`: store a run folder as a named baseline under `results/baselines/NAME/`.
 
+use schema::column;
 use std::path::{Path, PathBuf};
 
 use crate::error::Error;
@@ -46,11 +47,11 @@ pub fn save(run_dir: &Path, name: &str, force: bool) -> Result<PathBuf, Error> {
          ({} logical cores), {}.\n\nCompare a new run with it: `harness check <run dir> --baseline {}`.\n",
         run_dir.display(),
         rows.len(),
-        field("git_commit"),
-        field("git_dirty"),
-        field("cpu_model"),
-        field("logical_cores"),
-        field("timestamp"),
+        field(column::git_commit),
+        field(column::git_dirty),
+        field(column::cpu_model),
+        field(column::logical_cores),
+        field(column::timestamp),
         dest.display()
     );
     std::fs::write(dest.join("BASELINE.md"), note).map_err(|e| io(&dest, e))?;

@@ -101,7 +101,7 @@ pub struct CheckArgs {
     #[arg(long, default_value_t = 0.30)]
     pub min_effect_build: f64,
     /// Metric the speedups are computed from.
-    #[arg(long, default_value = "trace_s")]
+    #[arg(long, default_value = schema::column::trace_s)]
     pub metric: String,
     /// List changed work counters without failing on them.
     #[arg(long)]

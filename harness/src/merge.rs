@@ -5,6 +5,7 @@
 //! of different configs, commits or `Cargo.lock`s, and rows of more than one machine without
 //! `--allow-mixed-machines` (with it the report keeps every machine's times apart and says so at the top).
 
+use schema::column;
 use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
@@ -255,8 +256,8 @@ pub fn run(run_dir: &Path, allow_mixed_machines: bool) -> Result<(), Error> {
             )));
         }
     }
-    agree(run_dir, &shards, "git_commit", "commits")?;
-    agree(run_dir, &shards, "cargo_lock", "Cargo.lock files")?;
+    agree(run_dir, &shards, column::git_commit, "commits")?;
+    agree(run_dir, &shards, column::cargo_lock, "Cargo.lock files")?;
     let machines = machines(&shards);
     let described: Vec<String> = machines
         .iter()

@@ -4,6 +4,7 @@ use crate::pool::{self, Point};
 use crate::rows::Rows;
 use crate::spec::{ClaimKind, ClaimSpec, ReportSpec, Verdict};
 use crate::stats::Estimate;
+use schema::column;
 
 /// A checked claim.
 #[derive(Clone, Debug, PartialEq)]
@@ -77,7 +78,7 @@ fn collect_points(
     let mut labels: Vec<String> = Vec::new();
     let runs: Vec<crate::rows::Run> = rows.runs.iter().filter(|r| r.passes(&claim.filter)).cloned().collect();
     if rows.is_numeric(&claim.metric) {
-        for curve in pool::ratio_curves(spec, &runs, than, series, "objects", &claim.metric) {
+        for curve in pool::ratio_curves(spec, &runs, than, series, column::objects, &claim.metric) {
             for point in curve.points.into_iter().filter(in_range) {
                 let fixed = if curve.fixed.is_empty() { String::new() } else { format!(" ({})", curve.fixed) };
                 labels.push(format!("{} objects{fixed}", point.x));

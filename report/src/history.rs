@@ -3,6 +3,7 @@
 
 pub mod change_points;
 
+use schema::column;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -54,7 +55,7 @@ pub fn append(run_dir: &Path, spec: &ReportSpec, history_dir: &Path, options: &C
         });
     };
     let first = &rows.runs[0];
-    let timestamp = rows.runs.iter().map(|r| r.text("timestamp")).max().unwrap_or_default().to_string();
+    let timestamp = rows.runs.iter().map(|r| r.text(column::timestamp)).max().unwrap_or_default().to_string();
     let mut by_config: BTreeMap<&str, &rows::Run> = BTreeMap::new();
     for r in &rows.runs {
         by_config.entry(r.config_id()).or_insert(r);
@@ -69,8 +70,8 @@ pub fn append(run_dir: &Path, spec: &ReportSpec, history_dir: &Path, options: &C
     let counters = format!("{:016x}", h.finish());
     let path = history_dir.join("history.csv");
     let existing = read(&path)?;
-    let experiment = first.text("experiment").to_string();
-    let commit = first.text("git_commit").chars().take(12).collect::<String>();
+    let experiment = first.text(column::experiment).to_string();
+    let commit = first.text(column::git_commit).chars().take(12).collect::<String>();
     if existing.iter().any(|e| e.experiment == experiment && e.commit == commit && e.timestamp == timestamp) {
         return Err(Error::Mismatch { path, message: format!("{} is already in the history", run_dir.display()) });
     }
@@ -80,7 +81,7 @@ pub fn append(run_dir: &Path, spec: &ReportSpec, history_dir: &Path, options: &C
         let entry = Entry {
             experiment: experiment.clone(),
             commit: commit.clone(),
-            dirty: first.text("git_dirty").to_string(),
+            dirty: first.text(column::git_dirty).to_string(),
             timestamp: timestamp.clone(),
             series: p.series.clone(),
             point: p.point.clone(),

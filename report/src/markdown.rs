@@ -1,5 +1,6 @@
 //! REPORT.md: what ran, notes, figures, claims, a summary table pooled over seeds, the config.
 
+use schema::column;
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
@@ -42,16 +43,16 @@ pub fn report(rows: &Rows, spec: &ReportSpec, claims: &[ClaimResult]) -> String 
                 md,
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 r.series(),
-                r.text("accel"),
-                r.text("scene"),
-                r.text("objects"),
-                r.text("seed"),
-                r.text("workload"),
-                r.text("threads"),
-                r.text("mismatches"),
-                r.text("wrong_side"),
-                r.text("grazing"),
-                r.text("validated_against")
+                r.text(column::accel),
+                r.text(column::scene),
+                r.text(column::objects),
+                r.text(column::seed),
+                r.text(column::workload),
+                r.text(column::threads),
+                r.text(column::mismatches),
+                r.text(column::wrong_side),
+                r.text(column::grazing),
+                r.text(column::validated_against)
             );
         }
         md.push('\n');
@@ -90,14 +91,14 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     let reps: Vec<usize> = configs.iter().map(|id| runs.iter().filter(|r| r.config_id() == *id).count()).collect();
     let (rep_min, rep_max) = (reps.iter().min().unwrap_or(&0), reps.iter().max().unwrap_or(&0));
     let reps_text = if rep_min == rep_max { format!("{rep_min}") } else { format!("{rep_min}–{rep_max}") };
-    let loads = pool::samples(runs, "load_avg_1m");
+    let loads = pool::samples(runs, column::load_avg_1m);
     let load_min = loads.iter().copied().fold(f64::INFINITY, f64::min);
     let load_max = loads.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let dirty = runs.iter().any(|r| r.text("git_dirty") == "true");
-    let stamps: BTreeSet<&str> = runs.iter().map(|r| r.text("timestamp")).collect();
+    let dirty = runs.iter().any(|r| r.text(column::git_dirty) == "true");
+    let stamps: BTreeSet<&str> = runs.iter().map(|r| r.text(column::timestamp)).collect();
 
     md.push_str("## What ran\n\n");
-    let _ = writeln!(md, "- Experiment: {} (rows say: {})", spec.name, distinct(runs, "experiment"));
+    let _ = writeln!(md, "- Experiment: {} (rows say: {})", spec.name, distinct(runs, column::experiment));
     let _ = writeln!(
         md,
         "- Rows: {} timed repetitions of {} configurations ({reps_text} repetitions each)",
@@ -107,8 +108,8 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     let _ = writeln!(
         md,
         "- Machine: {}, {} logical cores; 1-minute load average min {} / median {} / max {}",
-        distinct(runs, "cpu_model"),
-        distinct(runs, "logical_cores"),
+        distinct(runs, column::cpu_model),
+        distinct(runs, column::logical_cores),
         num(load_min),
         num(stats::median(&loads)),
         num(load_max)
@@ -118,10 +119,10 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     let _ = writeln!(
         md,
         "- Code: commit {}{}; {}; harness {}",
-        distinct(runs, "git_commit"),
+        distinct(runs, column::git_commit),
         if dirty { " (dirty: uncommitted changes)" } else { " (clean)" },
-        distinct(runs, "rustc"),
-        distinct(runs, "harness_version")
+        distinct(runs, column::rustc),
+        distinct(runs, column::harness_version)
     );
     validation_line(md, runs);
     overhead_line(md, runs);
@@ -131,7 +132,7 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
         "- Statistics: medians over repetitions (and seeds where pooled); intervals are 95% percentile-bootstrap \
          intervals of the median (or of the ratio of medians), 2000 resamples\n\n",
     );
-    let over = runs.iter().filter(|r| r.num("threads") > r.num("logical_cores")).count();
+    let over = runs.iter().filter(|r| r.num(column::threads) > r.num(column::logical_cores)).count();
     if over > 0 {
         let _ = writeln!(
             md,
@@ -143,13 +144,13 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
 
 /// Nanoseconds per ray of a run's `metric` (a time in seconds over its rays); NaN without rays.
 fn ns_per_ray(run: &Run, metric: &str) -> f64 {
-    let rays = run.num("rays");
+    let rays = run.num(column::rays);
     if rays > 0.0 { run.num(metric) / rays * 1e9 } else { f64::NAN }
 }
 
 /// True when the runs recorded the harness's own cost (`overhead_s`: ray sets recorded since it existed).
 fn has_overhead(runs: &[Run]) -> bool {
-    runs.iter().any(|r| r.num("overhead_s").is_finite())
+    runs.iter().any(|r| r.num(column::overhead_s).is_finite())
 }
 
 /// The harness's own cost per ray, as the `null` backend measured it after every timed ray-set trace.
@@ -157,7 +158,7 @@ fn overhead_line(md: &mut String, runs: &[Run]) {
     if !has_overhead(runs) {
         return;
     }
-    let per_ray: Vec<f64> = runs.iter().map(|r| ns_per_ray(r, "overhead_s")).filter(|v| v.is_finite()).collect();
+    let per_ray: Vec<f64> = runs.iter().map(|r| ns_per_ray(r, column::overhead_s)).filter(|v| v.is_finite()).collect();
     let (lo, hi) = per_ray.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
     let _ = writeln!(
         md,
@@ -175,10 +176,11 @@ fn overhead_line(md: &mut String, runs: &[Run]) {
 fn repetitions_line(md: &mut String, runs: &[Run]) {
     // Per configuration: its rule, repetitions and the interval width after its last one.
     let mut configs: BTreeMap<&str, (&str, u32, f64)> = BTreeMap::new();
-    for r in runs.iter().filter(|r| r.text("validation") != schema::Named::name(schema::ValidationStatus::Failed)) {
-        let e = configs.entry(r.config_id()).or_insert((r.text("repetition_rule"), 0, f64::NAN));
+    for r in runs.iter().filter(|r| r.text(column::validation) != schema::Named::name(schema::ValidationStatus::Failed))
+    {
+        let e = configs.entry(r.config_id()).or_insert((r.text(column::repetition_rule), 0, f64::NAN));
         e.1 += 1;
-        e.2 = r.num("interval_width");
+        e.2 = r.num(column::interval_width);
     }
     let rules: BTreeSet<&str> = configs.values().map(|c| c.0).filter(|rule| rule.starts_with("auto ")).collect();
     for rule in rules {
@@ -219,14 +221,14 @@ fn validation_line(md: &mut String, runs: &[Run]) {
     for r in runs {
         configs.entry(r.config_id()).or_insert(r);
     }
-    let grazing: Vec<&&Run> = configs.values().filter(|r| r.num("grazing") > 0.0).collect();
-    let graze_rays: f64 = grazing.iter().map(|r| r.num("grazing")).sum();
-    let checked = configs.values().map(|r| r.num("reference_checked")).fold(0.0, f64::max);
+    let grazing: Vec<&&Run> = configs.values().filter(|r| r.num(column::grazing) > 0.0).collect();
+    let graze_rays: f64 = grazing.iter().map(|r| r.num(column::grazing)).sum();
+    let checked = configs.values().map(|r| r.num(column::reference_checked)).fold(0.0, f64::max);
     let _ = write!(
         md,
         "- Validation: {} timed configurations agreed with their reference ({}) before timing",
         configs.len(),
-        distinct(runs, "validated_against")
+        distinct(runs, column::validated_against)
     );
     if checked > 0.0 {
         let _ = write!(md, "; each reference checked against f64 brute force on up to {checked} rays of its ray set");
@@ -246,20 +248,24 @@ fn validation_line(md: &mut String, runs: &[Run]) {
 /// One line per machine that recorded rows (rows recorded before machine identity existed are left out).
 fn machines(md: &mut String, runs: &[Run]) {
     let mut seen = BTreeSet::new();
-    for r in runs.iter().filter(|r| !r.text("machine_id").is_empty()) {
-        if seen.insert(r.text("machine_id")) {
-            let hypervisor = if r.text("hypervisor") == "true" { ", virtual machine" } else { "" };
+    for r in runs.iter().filter(|r| !r.text(column::machine_id).is_empty()) {
+        if seen.insert(r.text(column::machine_id)) {
+            let hypervisor = if r.text(column::hypervisor) == "true" { ", virtual machine" } else { "" };
             let _ = writeln!(
                 md,
                 "  - machine `{}`: {} ({} {}), ISA {}, caches {}, kernel {}{hypervisor}; compiled for {}",
-                r.text("machine_id"),
-                r.text("cpu_model"),
-                r.text("cpu_vendor"),
-                r.text("cpu_signature"),
-                r.text("cpu_isa"),
-                r.text("cpu_caches"),
-                r.text("kernel"),
-                if r.text("target_features").is_empty() { "the baseline target" } else { r.text("target_features") }
+                r.text(column::machine_id),
+                r.text(column::cpu_model),
+                r.text(column::cpu_vendor),
+                r.text(column::cpu_signature),
+                r.text(column::cpu_isa),
+                r.text(column::cpu_caches),
+                r.text(column::kernel),
+                if r.text(column::target_features).is_empty() {
+                    "the baseline target"
+                } else {
+                    r.text(column::target_features)
+                }
             );
         }
     }
@@ -329,14 +335,14 @@ fn summary_table(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     let varying: Vec<&str> = POINT
         .iter()
         .copied()
-        .filter(|c| *c != "seed")
+        .filter(|c| *c != column::seed)
         .filter(|c| runs.iter().map(|r| r.text(c)).collect::<BTreeSet<_>>().len() > 1)
         .collect();
     md.push_str("## Summary\n\n");
     md.push_str(
         "One row per configuration with seeds pooled; full per-configuration statistics are in `summary.csv`.\n\n",
     );
-    let mut header = vec!["series".to_string()];
+    let mut header = vec![column::series.to_string()];
     header.extend(varying.iter().map(|c| c.to_string()));
     header.extend(["seeds", "n", "median total_s [95% CI]", "median Mrays/s"].map(String::from));
     let overhead = has_overhead(runs);
@@ -344,7 +350,7 @@ fn summary_table(md: &mut String, rows: &Rows, spec: &ReportSpec) {
         header.extend(["median trace ns/ray", "harness ns/ray"].map(String::from));
     }
     if let Some(reference) = &spec.reference {
-        let metrics: BTreeSet<&str> = runs.iter().map(|r| spec.speedup_metric_of(r.text("workload"))).collect();
+        let metrics: BTreeSet<&str> = runs.iter().map(|r| spec.speedup_metric_of(r.text(column::workload))).collect();
         let metrics = metrics.into_iter().collect::<Vec<_>>().join(" or ");
         header.push(format!("speedup in {metrics} vs {reference} [95% CI]"));
     }
@@ -354,25 +360,25 @@ fn summary_table(md: &mut String, rows: &Rows, spec: &ReportSpec) {
         let first = group[0];
         let mut cells = vec![cell(first.series())];
         cells.extend(varying.iter().map(|c| cell(first.text(c))));
-        let seeds: BTreeSet<&str> = group.iter().map(|r| r.text("seed")).collect();
+        let seeds: BTreeSet<&str> = group.iter().map(|r| r.text(column::seed)).collect();
         cells.push(seeds.len().to_string());
         cells.push(group.len().to_string());
         let key = format!("{}|pooled", first.config_id());
-        let total = stats::median_ci(&pool::samples(group.iter().copied(), "total_s"), stats::seed_for(&key));
+        let total = stats::median_ci(&pool::samples(group.iter().copied(), column::total_s), stats::seed_for(&key));
         cells.push(format!("{} [{}, {}]", num(total.value), num(total.lo), num(total.hi)));
-        cells.push(num(stats::median(&pool::samples(group.iter().copied(), "mrays_per_s"))));
+        cells.push(num(stats::median(&pool::samples(group.iter().copied(), column::mrays_per_s))));
         if overhead {
             let median_of = |metric: &str| {
                 let values: Vec<f64> = group.iter().map(|r| ns_per_ray(r, metric)).filter(|v| v.is_finite()).collect();
                 if values.is_empty() { "—".to_string() } else { num(stats::median(&values)) }
             };
-            cells.push(median_of("trace_s"));
-            cells.push(median_of("overhead_s"));
+            cells.push(median_of(column::trace_s));
+            cells.push(median_of(column::overhead_s));
         }
         if let Some(reference) = &spec.reference {
             let key = format!("{}|pooled speedup", first.config_id());
-            let metric = spec.speedup_metric_of(first.text("workload"));
-            cells.push(match pool::ratio_against(spec, runs, reference, &group, metric, &["seed"], &key) {
+            let metric = spec.speedup_metric_of(first.text(column::workload));
+            cells.push(match pool::ratio_against(spec, runs, reference, &group, metric, &[column::seed], &key) {
                 Some(e) => format!("{} [{}, {}]", num(e.value), num(e.lo), num(e.hi)),
                 None => "—".into(),
             });
@@ -386,7 +392,7 @@ fn summary_table(md: &mut String, rows: &Rows, spec: &ReportSpec) {
 /// reference's runs on that machine) and their geometric mean.
 fn across_machines(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     let runs = &rows.runs;
-    let machines: BTreeSet<&str> = runs.iter().map(|r| r.text("machine_id")).filter(|m| !m.is_empty()).collect();
+    let machines: BTreeSet<&str> = runs.iter().map(|r| r.text(column::machine_id)).filter(|m| !m.is_empty()).collect();
     let Some(reference) = &spec.reference else { return };
     if machines.len() < 2 {
         return;
@@ -394,7 +400,7 @@ fn across_machines(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     let varying: Vec<&str> = POINT
         .iter()
         .copied()
-        .filter(|c| *c != "seed" && *c != "machine_id")
+        .filter(|c| *c != column::seed && *c != column::machine_id)
         .filter(|c| runs.iter().map(|r| r.text(c)).collect::<BTreeSet<_>>().len() > 1)
         .collect();
     md.push_str(
@@ -409,7 +415,7 @@ fn across_machines(md: &mut String, rows: &Rows, spec: &ReportSpec) {
          absolute times of different machines are never pooled.\n",
         machines.len()
     );
-    let mut header = vec!["series".to_string()];
+    let mut header = vec![column::series.to_string()];
     header.extend(varying.iter().map(|c| c.to_string()));
     header.extend(["speedup per machine", "machines", "geometric mean"].map(String::from));
     let _ = writeln!(md, "| {} |", header.join(" | "));
@@ -418,7 +424,7 @@ fn across_machines(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     let mut groups: Vec<(Vec<String>, Vec<Vec<&Run>>)> = Vec::new();
     for pool in pool::seed_pools(runs) {
         let key = schema::row::pool_key(pool[0].series(), |c| {
-            if c == "machine_id" { String::new() } else { pool[0].text(c).to_string() }
+            if c == column::machine_id { String::new() } else { pool[0].text(c).to_string() }
         });
         match groups.iter_mut().find(|(k, _)| *k == key) {
             Some((_, pools)) => pools.push(pool),
@@ -427,13 +433,13 @@ fn across_machines(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     }
     for (_, pools) in groups {
         let first = pools[0][0];
-        let metric = spec.speedup_metric_of(first.text("workload"));
+        let metric = spec.speedup_metric_of(first.text(column::workload));
         let per_machine: Vec<(String, f64)> = pools
             .iter()
             .filter_map(|group| {
-                let key = format!("{}|{}|machine speedup", group[0].config_id(), group[0].text("machine_id"));
-                let e = pool::ratio_against(spec, runs, reference, group, metric, &["seed"], &key)?;
-                Some((group[0].text("machine_id").to_string(), e.value))
+                let key = format!("{}|{}|machine speedup", group[0].config_id(), group[0].text(column::machine_id));
+                let e = pool::ratio_against(spec, runs, reference, group, metric, &[column::seed], &key)?;
+                Some((group[0].text(column::machine_id).to_string(), e.value))
             })
             .filter(|(_, v)| v.is_finite() && *v > 0.0)
             .collect();

@@ -4,6 +4,7 @@
 use crate::rows::{POINT, Run};
 use crate::spec::ReportSpec;
 use crate::stats::{self, Estimate};
+use schema::column;
 
 /// One point of a series: an x value with the pooled estimate of a metric or a ratio.
 #[derive(Clone, Debug)]
@@ -89,7 +90,7 @@ pub(crate) fn curves_of<'a>(runs: &'a [Run], series: &str, x: &str) -> Vec<Curve
     let varying: Vec<&str> = POINT
         .iter()
         .copied()
-        .filter(|c| *c != "seed" && *c != x)
+        .filter(|c| *c != column::seed && *c != x)
         .filter(|c| own.iter().any(|r| r.text(c) != own[0].text(c)))
         .collect();
     let mut curves: Vec<CurveRuns> = Vec::new();
@@ -116,7 +117,7 @@ pub(crate) fn curves_of<'a>(runs: &'a [Run], series: &str, x: &str) -> Vec<Curve
 }
 
 fn max_threads(group: &[&Run]) -> f64 {
-    group.iter().map(|run| run.num("threads")).fold(f64::NAN, f64::max)
+    group.iter().map(|run| run.num(column::threads)).fold(f64::NAN, f64::max)
 }
 
 /// The curves of `series` against `x`, each point estimated by `estimate(fixed, x value, runs there)`, which
@@ -156,8 +157,8 @@ pub fn metric_curves(runs: &[Run], series: &str, x: &str, metric: &str) -> Vec<C
 pub fn ratio_curves(spec: &ReportSpec, runs: &[Run], other: &str, series: &str, x: &str, metric: &str) -> Vec<Curve> {
     curves_with(runs, series, x, |fixed, xv, group| {
         let key = format!("{other}/{series}|{fixed}|{x}={xv}|{metric}");
-        let estimate = ratio_against(spec, runs, other, group, metric, &["seed"], &key)?;
-        Some((estimate, max_threads(&counterparts(spec, runs, other, group, &["seed"]))))
+        let estimate = ratio_against(spec, runs, other, group, metric, &[column::seed], &key)?;
+        Some((estimate, max_threads(&counterparts(spec, runs, other, group, &[column::seed]))))
     })
 }
 

@@ -1,5 +1,6 @@
 //! What a report shows, as the experiment config says: series, reference, plots and claims.
 
+use schema::column;
 use std::collections::BTreeMap;
 
 /// Everything `report::write` needs besides the rows.
@@ -40,8 +41,8 @@ impl ReportSpec {
 pub fn speedup_metric<'a>(configured: Option<&'a str>, workload: &str) -> &'a str {
     match configured {
         Some(metric) => metric,
-        None if workload == schema::Named::name(schema::Workload::Render) => "total_s",
-        None => "trace_s",
+        None if workload == schema::Named::name(schema::Workload::Render) => column::total_s,
+        None => column::trace_s,
     }
 }
 

@@ -2,6 +2,7 @@
 //! configuration's repetitions; bootstrap intervals and speedups are added from the plain samples.
 
 use polars_core::prelude::*;
+use schema::column;
 
 use crate::pool;
 use crate::rows::{Rows, Run, SETTINGS};
@@ -9,7 +10,7 @@ use crate::spec::ReportSpec;
 use crate::stats;
 
 /// Metrics summarised per configuration.
-pub const METRICS: [&str; 4] = ["total_s", "trace_s", "build_s", "mrays_per_s"];
+pub const METRICS: [&str; 4] = [column::total_s, column::trace_s, column::build_s, column::mrays_per_s];
 
 /// Columns equal in every repetition of a configuration (the schema's counters), carried from the first one.
 fn deterministic() -> Vec<&'static str> {
@@ -26,11 +27,13 @@ pub fn summarise(rows: &Rows, spec: &ReportSpec) -> PolarsResult<DataFrame> {
     let text = |name: &str| -> PolarsResult<Vec<String>> {
         Ok(frame.column(name)?.str()?.iter().map(|v| v.unwrap_or("").to_string()).collect())
     };
-    let (ids, machines) = (text("config_id")?, text("machine_id")?);
+    let (ids, machines) = (text(column::config_id)?, text(column::machine_id)?);
     let groups: Vec<Vec<&Run>> = ids
         .iter()
         .zip(&machines)
-        .map(|(id, m)| rows.runs.iter().filter(|run| run.config_id() == id && run.text("machine_id") == m).collect())
+        .map(|(id, m)| {
+            rows.runs.iter().filter(|run| run.config_id() == id && run.text(column::machine_id) == m).collect()
+        })
         .collect();
 
     for metric in METRICS {
@@ -49,13 +52,13 @@ pub fn summarise(rows: &Rows, spec: &ReportSpec) -> PolarsResult<DataFrame> {
         .map(|(id, group)| {
             let reference = spec.reference.as_deref()?;
             let key = format!("{id}|speedup");
-            let metric = spec.speedup_metric_of(group.first()?.text("workload"));
+            let metric = spec.speedup_metric_of(group.first()?.text(column::workload));
             pool::ratio_against(spec, &rows.runs, reference, group, metric, &[], &key)
         })
         .collect();
     let speedup_metrics: Vec<Option<&str>> = groups
         .iter()
-        .map(|g| spec.reference.as_ref().and(g.first()).map(|r| spec.speedup_metric_of(r.text("workload"))))
+        .map(|g| spec.reference.as_ref().and(g.first()).map(|r| spec.speedup_metric_of(r.text(column::workload))))
         .collect();
     frame.with_column(Column::new("speedup_metric".into(), speedup_metrics))?;
     frame.with_column(float_column("speedup", speedups.iter().map(|e| e.map(|e| e.value))))?;
@@ -73,14 +76,17 @@ pub fn summarise(rows: &Rows, spec: &ReportSpec) -> PolarsResult<DataFrame> {
 /// rustls, ...) into the build, about 90 s of compile on 2 cores for the same numbers (README, "Build time").
 #[allow(deprecated)] // the eager aggregates are deprecated in favour of the lazy ones
 fn aggregate(rows: &DataFrame) -> PolarsResult<DataFrame> {
-    let groups = rows.group_by_stable(["config_id", "machine_id"])?;
-    let firsts: Vec<&str> =
-        ["experiment", "series"].into_iter().chain(SETTINGS.iter().copied()).chain(deterministic()).collect();
+    let groups = rows.group_by_stable([column::config_id, column::machine_id])?;
+    let firsts: Vec<&str> = [column::experiment, column::series]
+        .into_iter()
+        .chain(SETTINGS.iter().copied())
+        .chain(deterministic())
+        .collect();
     let mut frame = groups.clone().select(firsts.clone()).first()?;
     for name in firsts {
         frame.rename(&format!("{name}_first"), name.into())?;
     }
-    let count = groups.clone().select(["series"]).count()?;
+    let count = groups.clone().select([column::series]).count()?;
     frame.with_column(count.column("series_count")?.cast(&DataType::Int64)?.with_name("n".into()))?;
     for metric in METRICS {
         let stats: [(&str, DataFrame, String); 5] = [
@@ -103,7 +109,7 @@ fn aggregate(rows: &DataFrame) -> PolarsResult<DataFrame> {
 
 /// The summary's columns in output order.
 fn column_order() -> Vec<String> {
-    let mut names: Vec<String> = ["config_id", "machine_id", "experiment", "series"]
+    let mut names: Vec<String> = [column::config_id, column::machine_id, column::experiment, column::series]
         .iter()
         .chain(SETTINGS.iter())
         .map(|c| c.to_string())

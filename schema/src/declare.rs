@@ -324,5 +324,13 @@ macro_rules! declare_columns {
                 doc: concat!($($mdoc),+),
             }, )+
         ];
+
+        /// Every column's name as a constant: code reads a row's columns through these, never through literals.
+        #[allow(non_upper_case_globals)]
+        pub mod column {
+            $( #[doc = concat!("The `", stringify!($i), "` column.")] pub const $i: &str = stringify!($i); )+
+            $( #[doc = concat!("The `", stringify!($s), "` column.")] pub const $s: &str = stringify!($s); )+
+            $( #[doc = concat!("The `", stringify!($m), "` column.")] pub const $m: &str = stringify!($m); )+
+        }
     };
 }

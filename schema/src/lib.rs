@@ -21,7 +21,7 @@ pub mod row;
 pub mod rows_md;
 pub mod value;
 
-pub use columns::{Axis, AxisValue, Row, Settings};
+pub use columns::{Axis, AxisValue, Row, Settings, column};
 pub use names::{
     Accel, EmbreeIsa, EmbreeQuality, LeafBlock, Named, NodeWidth, ObvhsQuality, PacketSize, PeerKind, SceneName,
     Threads, ValidationStatus, Workload,

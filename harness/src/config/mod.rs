@@ -392,7 +392,7 @@ fn parse_repetitions(s: &Section<'_>) -> Result<Option<Repetitions>, Error> {
 
 /// A metric key (`y` of a plot, `metric` of a claim), `total_s` when absent.
 fn metric(s: &Section<'_>, key: &str) -> Result<String, Error> {
-    let m = s.string(key)?.unwrap_or("total_s").to_string();
+    let m = s.string(key)?.unwrap_or(schema::column::total_s).to_string();
     if !metrics().contains(&m.as_str()) {
         return Err(s.error(key, format!("unknown metric {m:?} (allowed: {})", metrics().join(", "))));
     }

@@ -1,6 +1,7 @@
 //! `harness rows-diff A B`: whether two row logs hold the same rows, in any order (e.g. a merged sharded sweep and
 //! the same sweep unsharded).
 
+use schema::column;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -12,7 +13,8 @@ use crate::merge::read_log;
 use crate::run::RUNS_CSV;
 
 /// Provenance that differs from run to run of one build on one machine; ignored with the timings.
-pub const PER_RUN: [&str; 5] = ["load_avg_1m", "timestamp", "shard", "slurm_job_id", "node"];
+pub const PER_RUN: [&str; 5] =
+    [column::load_avg_1m, column::timestamp, column::shard, column::slurm_job_id, column::node];
 
 /// The columns compared: all, or all but the timings and [`PER_RUN`].
 pub fn compared(ignore_timing: bool) -> Vec<&'static str> {

@@ -4,6 +4,7 @@
 //! The interval is the report's (percentile bootstrap of the median, [`report::stats::median_ci`]) of the
 //! metric speedups are ratios of, so a configuration that stopped shows an interval at most the target wide.
 
+use schema::column;
 use std::collections::HashMap;
 
 use report::stats;
@@ -14,20 +15,20 @@ use crate::config::Repetitions;
 /// The phase whose samples decide for `metric`: the phase itself, `trace_s` for `mrays_per_s` (the same relative
 /// interval); `None` for a counter, which is the same in every repetition.
 pub fn deciding_phase(metric: &str) -> Option<&'static str> {
-    ["setup_s", "scene_s", "build_s", "trace_s", "encode_s", "total_s"]
+    [column::setup_s, column::scene_s, column::build_s, column::trace_s, column::encode_s, column::total_s]
         .into_iter()
         .find(|p| *p == metric)
-        .or((metric == "mrays_per_s").then_some("trace_s"))
+        .or((metric == column::mrays_per_s).then_some(column::trace_s))
 }
 
 /// The value of `metric`'s deciding phase in a run's timing.
 pub fn timed_value(t: &Timing, metric: &str) -> Option<f64> {
     Some(match deciding_phase(metric)? {
-        "setup_s" => t.setup_s,
-        "scene_s" => t.scene_s,
-        "build_s" => t.build_s,
-        "trace_s" => t.trace_s,
-        "encode_s" => t.encode_s,
+        column::setup_s => t.setup_s,
+        column::scene_s => t.scene_s,
+        column::build_s => t.build_s,
+        column::trace_s => t.trace_s,
+        column::encode_s => t.encode_s,
         _ => t.total_s(),
     })
 }

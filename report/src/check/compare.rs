@@ -2,6 +2,7 @@
 //! (module `instructions`), every configuration's phase times and the speedups compared with bootstrap intervals
 //! of `new / old`; and the second measurement of flagged times ([`CheckOutcome::confirm`]).
 
+use schema::column;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
@@ -211,9 +212,9 @@ fn times(
                 config_id: id.to_string(),
                 series: run.series().to_string(),
                 settings: describe.settings(run),
-                threads: match run.num("threads") {
+                threads: match run.num(column::threads) {
                     used if used.is_finite() => format!("{used}"),
-                    _ => run.text("threads").to_string(),
+                    _ => run.text(column::threads).to_string(),
                 },
                 metric,
                 gating: mode.gates_times() && first.old.value >= options.min_time_s,
@@ -294,7 +295,7 @@ fn compare_counters(describe: &Describer, new: &Rows, old: &Rows) -> Counters {
 
 /// Distinct `experiment` values of a file (failed rows included).
 fn experiments(rows: &Rows) -> BTreeSet<String> {
-    rows.runs.iter().chain(&rows.failed).map(|r| r.text("experiment").to_string()).collect()
+    rows.runs.iter().chain(&rows.failed).map(|r| r.text(column::experiment).to_string()).collect()
 }
 
 /// Whether the file has `column`.
@@ -307,7 +308,7 @@ fn first_repetitions(runs: &[Run]) -> BTreeMap<&str, &Run> {
     let mut first: BTreeMap<&str, &Run> = BTreeMap::new();
     for run in runs {
         let entry = first.entry(run.config_id()).or_insert(run);
-        if run.num("repetition") < entry.num("repetition") {
+        if run.num(column::repetition) < entry.num(column::repetition) {
             *entry = run;
         }
     }
@@ -331,7 +332,7 @@ impl Describer {
                 let columns = SETTINGS
                     .iter()
                     .copied()
-                    .filter(|c| *c != "scene")
+                    .filter(|c| *c != column::scene)
                     .filter(|c| runs.iter().any(|r| r.text(c) != runs[0].text(c)))
                     .collect();
                 (series.to_string(), columns)
@@ -341,7 +342,7 @@ impl Describer {
     }
 
     fn settings(&self, run: &Run) -> String {
-        let mut parts = vec![run.text("scene").to_string()];
+        let mut parts = vec![run.text(column::scene).to_string()];
         for column in self.varying.get(run.series()).into_iter().flatten() {
             parts.push(format!("{column} {}", run.text(column)));
         }
@@ -360,7 +361,9 @@ pub(crate) fn speedups(
     let metric = options.metric.as_str();
     // Points are matched across the two files whatever machines recorded them (`pool_key` holds `machine_id`).
     let point_key = |run: &Run| {
-        schema::row::pool_key(run.series(), |c| if c == "machine_id" { String::new() } else { run.text(c).to_string() })
+        schema::row::pool_key(run.series(), |c| {
+            if c == column::machine_id { String::new() } else { run.text(c).to_string() }
+        })
     };
     let old_pools: BTreeMap<Vec<String>, Vec<&Run>> =
         pool::seed_pools(old).into_iter().map(|group| (point_key(group[0]), group)).collect();
@@ -372,11 +375,11 @@ pub(crate) fn speedups(
     }
     let mut out = Vec::new();
     for label in series.iter().filter(|s| *s != reference) {
-        for (fixed, groups) in pool::curves_of(new, label, "objects") {
+        for (fixed, groups) in pool::curves_of(new, label, column::objects) {
             for (x, new_group) in groups {
                 let Some(old_group) = old_pools.get(&point_key(new_group[0])) else { continue };
                 let side = |runs: &[Run], group: &[&Run]| {
-                    let reference_runs = pool::counterparts(spec, runs, reference, group, &["seed"]);
+                    let reference_runs = pool::counterparts(spec, runs, reference, group, &[column::seed]);
                     (pool::samples(reference_runs, metric), pool::samples(group.iter().copied(), metric))
                 };
                 let (ref_new, ser_new) = side(new, &new_group);
@@ -384,8 +387,8 @@ pub(crate) fn speedups(
                 if [&ref_new, &ser_new, &ref_old, &ser_old].iter().any(|s| s.is_empty()) {
                     continue;
                 }
-                let threads = new_group[0].text("threads");
-                let point = if fixed.contains("threads") || threads.is_empty() {
+                let threads = new_group[0].text(column::threads);
+                let point = if fixed.contains(column::threads) || threads.is_empty() {
                     format!("objects {x} ({fixed})")
                 } else if fixed.is_empty() {
                     format!("objects {x} (threads {threads})")

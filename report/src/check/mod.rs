@@ -24,6 +24,7 @@ mod compare;
 pub mod instructions;
 mod render;
 
+use schema::column;
 use serde::Serialize;
 
 pub use crate::stats::Estimate;
@@ -38,7 +39,7 @@ pub fn counters() -> Vec<&'static str> {
 }
 
 /// The wall-time phases compared per configuration.
-pub const TIMED_PHASES: [&str; 2] = ["trace_s", "build_s"];
+pub const TIMED_PHASES: [&str; 2] = [column::trace_s, column::build_s];
 
 /// How strict the comparison is.
 #[derive(Clone, Debug, PartialEq)]
@@ -69,14 +70,14 @@ pub struct CheckOptions {
 impl CheckOptions {
     /// The minimum effect of a phase time (`build_s`: [`CheckOptions::min_effect_build`]; else `min_effect`).
     pub fn time_effect(&self, metric: &str) -> f64 {
-        if metric == "build_s" { self.min_effect_build } else { self.min_effect }
+        if metric == column::build_s { self.min_effect_build } else { self.min_effect }
     }
 }
 
 impl Default for CheckOptions {
     fn default() -> Self {
         CheckOptions {
-            metric: "trace_s".into(),
+            metric: column::trace_s.into(),
             min_effect: 0.10,
             min_effect_build: 0.30,
             accept_counter_changes: false,

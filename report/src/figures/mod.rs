@@ -2,6 +2,7 @@
 
 pub(crate) mod chart;
 
+use schema::column;
 use std::path::{Path, PathBuf};
 
 use crate::error::Error;
@@ -87,35 +88,35 @@ fn chart_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Chart {
     Chart { title, x_label: axis_label(&plot.x), y_label, log_x: plot.log_x, log_y: plot.log_y, lines, guide }
 }
 
-fn is_time(column: &str) -> bool {
-    column.ends_with("_s") && column != "mrays_per_s"
+fn is_time(name: &str) -> bool {
+    name.ends_with("_s") && name != column::mrays_per_s
 }
 
 /// A y axis label with units.
-fn metric_label(column: &str) -> String {
-    match column {
-        "total_s" => "total time (s)".into(),
-        "trace_s" => "trace time (s)".into(),
-        "build_s" => "build time (s)".into(),
-        "scene_s" => "scene time (s)".into(),
-        "encode_s" => "encode time (s)".into(),
-        "mrays_per_s" => "throughput (Mrays/s)".into(),
-        "nodes_per_ray" => "nodes visited per ray".into(),
-        "box_tests_per_ray" => "box tests per ray".into(),
-        "prim_tests_per_ray" => "primitive tests per ray".into(),
-        "sah_cost" => "SAH cost".into(),
-        "tree_bytes" => "tree size (bytes)".into(),
+fn metric_label(name: &str) -> String {
+    match name {
+        column::total_s => "total time (s)".into(),
+        column::trace_s => "trace time (s)".into(),
+        column::build_s => "build time (s)".into(),
+        column::scene_s => "scene time (s)".into(),
+        column::encode_s => "encode time (s)".into(),
+        column::mrays_per_s => "throughput (Mrays/s)".into(),
+        column::nodes_per_ray => "nodes visited per ray".into(),
+        column::box_tests_per_ray => "box tests per ray".into(),
+        column::prim_tests_per_ray => "primitive tests per ray".into(),
+        column::sah_cost => "SAH cost".into(),
+        column::tree_bytes => "tree size (bytes)".into(),
         other => other.replace('_', " "),
     }
 }
 
 /// An x axis label.
-fn axis_label(column: &str) -> String {
-    match column {
-        "objects" => "objects (spheres)".into(),
-        "threads" => "worker threads".into(),
-        "leaf_size" => "max leaf size".into(),
-        "sah_bins" => "SAH bins".into(),
+fn axis_label(name: &str) -> String {
+    match name {
+        column::objects => "objects (spheres)".into(),
+        column::threads => "worker threads".into(),
+        column::leaf_size => "max leaf size".into(),
+        column::sah_bins => "SAH bins".into(),
         other => other.replace('_', " "),
     }
 }
