@@ -6,6 +6,7 @@
 use std::io::BufWriter;
 use std::time::Instant;
 
+use schema::columns::Replaced;
 use schema::{Axis, Named, Raw, SceneName, Settings, Workload};
 use tracer::scene::{Scene, sphere_file};
 
@@ -36,6 +37,9 @@ pub fn settings_of(pairs: &[String]) -> Result<Settings, Error> {
         let Some((key, value)) = pair.split_once('=') else {
             return Err(Error::Input(format!("--set {pair}: expected KEY=VALUE (allowed keys: {})", keys())));
         };
+        if let Some(replaced) = Replaced::of(key.trim()) {
+            return Err(Error::Input(format!("--set {key}: {}", replaced.instead())));
+        }
         let axis = Axis::from_key(key.trim())
             .ok_or_else(|| Error::Input(format!("--set {key}: unknown key (allowed: {})", keys())))?;
         if axis == Axis::workload {
@@ -70,13 +74,6 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
     let settings = settings_of(&args.set)?;
     let backend = backend::of(settings.accel);
     backend.available(&settings).map_err(|e| Error::Input(format!("--set accel={}: {e}", settings.accel.name())))?;
-    if let Some((axis, allowed)) = backend.refuses(&settings) {
-        return Err(Error::Input(format!(
-            "--set {}={}: not allowed here (allowed: {allowed})",
-            axis.key(),
-            settings.get(axis)
-        )));
-    }
     let file = scene_file(&settings, args)?;
     let setup = Setup::start(&settings)?;
     let t0 = Instant::now();

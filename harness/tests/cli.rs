@@ -210,50 +210,41 @@ fn wide_bvh_runs_validated_and_records_its_kernel() {
 }
 
 #[test]
-fn a_packet_size_not_allowed_is_one_line_exit_2_and_nothing_written() {
+fn a_packet_not_allowed_or_the_old_packet_size_is_one_line_exit_2_and_nothing_written() {
     let dir = temp("packet");
     let cfg = dir.join("packet.toml");
-    let wide = AccelKind::WideBvh.name();
-    std::fs::write(
-        &cfg,
-        format!("name = \"t\"\n[sweep]\naccel = \"{wide}\"\nworkload = \"primary\"\npacket_size = 4\n"),
-    )
-    .unwrap();
-    let out = dir.join("out");
-    let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(2), "{err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
-    assert!(err.contains("packet.toml: sweep.packet_size[0]: 4 is not allowed (allowed: 1, 8, 16, 64)"), "{err}");
-    assert!(!out.exists(), "nothing written");
-}
-
-#[test]
-fn a_packet_size_embree_packets_cannot_trace_is_one_line_exit_2_and_nothing_written() {
-    let dir = temp("embree-packet");
-    let cfg = dir.join("embree-packet.toml");
     let (wide, embree) = (AccelKind::WideBvh.name(), PeerKind::EmbreePackets.name());
-    // 1 is allowed for the wide BVH and parses, but embree-packets traces 8 or 16 rays at a time. Refused while
-    // planning, before Embree is looked for, so this holds with or without it.
-    std::fs::write(
-        &cfg,
-        format!(
-            "name = \"t\"\n[sweep]\nworkload = \"primary\"\n[[series]]\nlabel = \"wide\"\naccel = \"{wide}\"\npacket_size = 1\n\
-             [[series]]\nlabel = \"embree\"\naccel = \"{embree}\"\npacket_size = [8, 1]\n"
+    let base = "name = \"t\"\n[sweep]\nworkload = \"primary\"\n";
+    let cases = [
+        (
+            format!("{base}accel = \"{wide}\"\npacket = \"masked-4\"\n"),
+            "packet.toml: sweep.packet[0]: unknown value \"masked-4\" (allowed: single, masked-8, masked-16, tile-8x8)",
         ),
-    )
-    .unwrap();
+        // Refused while reading the config, before Embree is looked for, so this holds with or without it.
+        (
+            format!("{base}[[series]]\nlabel = \"e\"\naccel = \"{embree}\"\nembree_packet = [8, 1]\n"),
+            "packet.toml: series[0].embree_packet[1]: 1 is not allowed (allowed: 8, 16)",
+        ),
+        (
+            format!("{base}[[series]]\nlabel = \"w\"\naccel = \"{wide}\"\npacket_size = 64\n"),
+            "packet.toml: series[0].packet_size: replaced by packet (allowed: single, masked-8, masked-16, tile-8x8) \
+             and embree_packet (allowed: 8, 16)",
+        ),
+    ];
     let out = dir.join("out");
-    for args in
-        [vec!["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()], vec!["validate", cfg.to_str().unwrap()]]
-    {
-        let o = harness().args(&args).output().unwrap();
-        let err = stderr(&o);
-        assert_eq!(o.status.code(), Some(2), "{err}");
-        assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
-        let expected = "embree-packet.toml: series[1].packet_size[1]: 1 is not allowed with accel embree-packets (allowed there: 8, 16)";
-        assert!(err.contains(expected), "expected {expected:?} in {err}");
-        assert!(!out.exists(), "nothing written");
+    for (text, expected) in cases {
+        std::fs::write(&cfg, text).unwrap();
+        for args in [
+            vec!["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()],
+            vec!["validate", cfg.to_str().unwrap()],
+        ] {
+            let o = harness().args(&args).output().unwrap();
+            let err = stderr(&o);
+            assert_eq!(o.status.code(), Some(2), "{err}");
+            assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+            assert!(err.contains(expected), "expected {expected:?} in {err}");
+            assert!(!out.exists(), "nothing written");
+        }
     }
 }
 

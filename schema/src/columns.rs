@@ -8,9 +8,10 @@ use tracer::executor::{Strategy, StrategyKind};
 use tracer::scene::SceneKind;
 
 use crate::names::{
-    Accel, EmbreeIsa, EmbreeQuality, LeafBlock, NodeWidth, ObvhsQuality, PacketSize, PeerKind, SceneName, Threads,
-    ValidationStatus, Workload,
+    Accel, EmbreeIsa, EmbreePacket, EmbreeQuality, LeafBlock, NodeWidth, ObvhsQuality, Packet, PeerKind, SceneName,
+    Threads, ValidationStatus, Workload,
 };
+use crate::row::Cell;
 
 declare_columns! {
     identity {
@@ -77,11 +78,15 @@ declare_columns! {
         simd_kernel: Option<Kernel> = Some(WideParams::default().kernel), applies wide else None, added 2;
         /// Order in which the wide BVH visits a node's children: stored, nearest entry first, or by ray octant.
         child_order: Option<ChildOrdering> = Some(WideParams::default().order), applies wide else None, added 2;
-        /// Rays traced together in a ray set (renders trace one ray at a time): the wide BVH 1 (one at a time),
-        /// packets of 8 or 16 with an active mask, or 64: frustum-culled packets of an 8×8 tile of camera rays;
-        /// `embree-packets` 8 (`rtcIntersect8`) or 16 (`rtcIntersect16`, its default).
-        packet_size: Option<PacketSize> = Some(PacketSize(WideParams::default().packet)), applies packet_ray_set else None,
-            default_for embree_packets = Some(PacketSize::EMBREE_DEFAULT), added 4, unit "rays";
+        /// How the wide BVH traces a ray set's rays (renders trace one at a time): `single` (one at a time),
+        /// `masked-8` or `masked-16` (packets of 8 or 16 rays with an active mask), or `tile-8x8` (frustum-culled
+        /// packets of an 8×8 tile of camera rays). Rows before this column had it in `packet_size` (1, 8, 16, 64).
+        packet: Option<Packet> = Packet::of_rays(WideParams::default().packet), applies wide_ray_set else None,
+            added 6, id packet_size_cell;
+        /// Rays of `embree-packets`' queries on a ray set: 8 (`rtcIntersect8`) or 16 (`rtcIntersect16`). Rows
+        /// before this column had it in `packet_size`.
+        embree_packet: Option<EmbreePacket> = Some(EmbreePacket(16)), applies embree_packet_ray_set else None,
+            added 6, unit "rays";
     }
     measures {
         /// Wall time of the backend's one-time start-up in the process that times the configuration: thread pool,
@@ -228,14 +233,14 @@ fn wide(s: &Settings) -> bool {
     s.accel.is_wide()
 }
 
-/// Packets are for ray sets of the wide BVH and Embree's packet queries: renders trace one ray at a time.
-fn packet_ray_set(s: &Settings) -> bool {
-    (s.accel.is_wide() || embree_packets(s)) && s.workload != Workload::Render
+/// The wide BVH's packets are for ray sets: renders trace one ray at a time.
+fn wide_ray_set(s: &Settings) -> bool {
+    wide(s) && s.workload != Workload::Render
 }
 
-/// Embree's packet queries (16 rays unless told 8).
-fn embree_packets(s: &Settings) -> bool {
-    s.accel == Accel::Peer(PeerKind::EmbreePackets)
+/// Embree's packet queries are for ray sets too.
+fn embree_packet_ray_set(s: &Settings) -> bool {
+    s.accel == Accel::Peer(PeerKind::EmbreePackets) && s.workload != Workload::Render
 }
 
 /// Only the binned SAH split has bins.
@@ -268,6 +273,51 @@ fn embree(s: &Settings) -> bool {
     s.accel.peer().is_some_and(PeerKind::needs_embree)
 }
 
+/// `packet`'s cell in the configuration id: the integer `packet_size` it replaced (`0` where it does not apply), so
+/// configurations recorded before keep their ids.
+fn packet_size_cell(packet: &Option<Packet>) -> Cell {
+    Cell::Int(packet.map_or(0, |p| i64::from(p.rays())))
+}
+
+/// A setting of earlier row formats that later ones replaced: configs that name it are refused with the new keys,
+/// and rows that have its column read into them.
+pub struct Replaced {
+    /// Its config key and row column.
+    pub key: &'static str,
+    /// The settings that replaced it.
+    pub by: &'static [Axis],
+    /// Sets them from a row's cell of the old column (normalization then drops those that do not apply).
+    pub read: fn(&mut Settings, &str),
+}
+
+/// Every replaced setting.
+pub const REPLACED: &[Replaced] =
+    &[Replaced { key: "packet_size", by: &[Axis::packet, Axis::embree_packet], read: read_packet_size }];
+
+impl Replaced {
+    /// The replaced setting `key`, if it is one.
+    pub fn of(key: &str) -> Option<&'static Replaced> {
+        REPLACED.iter().find(|r| r.key == key)
+    }
+
+    /// What to write instead, for error messages.
+    pub fn instead(&self) -> String {
+        let by: Vec<String> = self.by.iter().map(|a| format!("{} (allowed: {})", a.key(), a.allowed())).collect();
+        format!("replaced by {}", by.join(" and "))
+    }
+}
+
+/// `packet_size` (row formats 4 and 5): the wide BVH's rays traced together, or `embree-packets`' width.
+fn read_packet_size(settings: &mut Settings, cell: &str) {
+    let Ok(rays) = cell.parse::<u32>() else { return };
+    if let Some(p) = Packet::of_rays(rays) {
+        settings.packet = Some(p);
+    }
+    if let Some(e) = EmbreePacket::new(rays) {
+        settings.embree_packet = Some(e);
+    }
+}
+
 impl Settings {
     /// The tracer's structure and tree parameters (a peer's settings give the list, which is never built).
     pub fn accel_params(&self) -> AccelParams {
@@ -292,7 +342,7 @@ impl Settings {
             leaf_block: self.leaf_block.map_or(wide_default.leaf_block, |b| b.0),
             kernel: self.simd_kernel.unwrap_or(wide_default.kernel),
             order: self.child_order.unwrap_or(wide_default.order),
-            packet: self.packet_size.map_or(wide_default.packet, |p| p.0),
+            packet: self.packet.map_or(wide_default.packet, Packet::rays),
         };
         AccelParams { kind, bvh, wide }
     }

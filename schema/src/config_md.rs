@@ -1,7 +1,7 @@
 //! `docs/configuration.md`, the configuration reference, generated from the declaration (a test keeps the file in
 //! step, as for `report/ROWS.md`).
 
-use crate::columns::Axis;
+use crate::columns::{Axis, REPLACED};
 
 /// The keys of a config around the sweep's settings, with what they take (the harness parses them).
 const TABLES: &str = "\
@@ -50,6 +50,10 @@ pub fn text() -> String {
             axis.unit(),
             axis.doc().trim().replace('|', "\\|"),
         ));
+    }
+    md.push_str("\nKeys of earlier versions, refused with what to write instead:\n\n");
+    for r in REPLACED {
+        md.push_str(&format!("- `{}`: {}.\n", r.key, r.instead()));
     }
     md
 }

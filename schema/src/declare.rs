@@ -14,14 +14,13 @@ pub(crate) use or_default;
 
 /// Declares the row: identity columns, settings (axes) and measures, in row order.
 ///
-/// A setting reads `key: Type = default [, range(LO, HI)] [, applies PREDICATE else VALUE]
-/// [, default_for PREDICATE = VALUE] [, added N] [, unit "u"];`: `applies` names a `fn(&Settings) -> bool` that
-/// says whether the setting applies to a configuration (where it does not, normalization sets it to VALUE, so it
-/// never multiplies runs); `default_for` gives the configurations its predicate holds for (where the setting
-/// applies) a default of their own: normalization replaces the declared default there, and the not-applicable
-/// value a row recorded before the setting applied to them holds, with VALUE;
+/// A setting reads `key: Type = default [, range(LO, HI)] [, applies PREDICATE else VALUE] [, added N]
+/// [, id CELL] [, unit "u"];`: `applies` names a `fn(&Settings) -> bool` that says whether the setting applies to a
+/// configuration (where it does not, normalization sets it to VALUE, so it never multiplies runs);
 /// `added N` marks settings added in row format N (after the first), which join the configuration id only when
-/// they differ from their default (VALUE where `default_for` holds), so that existing configurations keep their ids.
+/// they differ from their default and their not-applicable value, so that existing configurations keep their ids;
+/// `id` names a `fn(&Type) -> Cell` giving the cell the id hashes in place of the row cell (a setting that replaced
+/// one recorded under another spelling hashes the old spelling, so configurations keep their ids).
 /// A measure reads `key: Type, Role [= default] [, unit "u"] [, decimals N] [, added N];` (`added`: rows recorded
 /// before format N lack the column and read as its default).
 macro_rules! declare_columns {
@@ -34,8 +33,8 @@ macro_rules! declare_columns {
                $s:ident : $sty:ty = $sdef:expr
                $(, range($lo:expr, $hi:expr))?
                $(, applies $pred:ident else $na:expr)?
-               $(, default_for $dpred:ident = $dval:expr)?
                $(, added $added:literal)?
+               $(, id $idf:ident)?
                $(, unit $sunit:literal)? ; )+
         }
         measures {
@@ -200,20 +199,10 @@ macro_rules! declare_columns {
                 match axis { $( Axis::$s => { true $( && $pred(self) )? } )+ }
             }
 
-            /// The same settings with every setting that does not apply set to its not-applicable value, and the
-            /// `default_for` defaults in place of the declared ones.
+            /// The same settings with every setting that does not apply set to its not-applicable value.
             pub fn normalized(&self) -> Settings {
-                use crate::value::AxisType;
                 let mut out = self.clone();
                 $( $( if !$pred(self) { out.$s = $na; } )? )+
-                $( $(
-                    if out.applies(Axis::$s)
-                        && $dpred(self)
-                        && (out.$s == $sdef || out.$s.cell() == <$sty as AxisType>::not_applicable_cell())
-                    {
-                        out.$s = $dval;
-                    }
-                )? )+
                 out
             }
 
@@ -223,8 +212,8 @@ macro_rules! declare_columns {
                 vec![ $( self.$s.cell(), )+ ]
             }
 
-            /// The cells that identify the configuration: every setting in row order, except `added`
-            /// settings at their default or not-applicable value.
+            /// The cells that identify the configuration: every setting in row order (its `id` cell where the
+            /// declaration names one), except `added` settings at their default or not-applicable value.
             pub fn id_cells(&self) -> Vec<crate::row::Cell> {
                 use crate::value::AxisType;
                 let default = Settings::default();
@@ -232,11 +221,9 @@ macro_rules! declare_columns {
                 $(
                     let cell = self.$s.cell();
                     let skip = Axis::$s.added()
-                        && (cell == default.$s.cell()
-                            || cell == <$sty as AxisType>::not_applicable_cell()
-                            $( || ($dpred(self) && cell == <$sty as AxisType>::cell(&$dval)) )?);
+                        && (cell == default.$s.cell() || cell == <$sty as AxisType>::not_applicable_cell());
                     if !skip {
-                        cells.push(cell);
+                        cells.push(crate::declare::or_default!($( $idf(&self.$s) )?; cell));
                     }
                 )+
                 cells

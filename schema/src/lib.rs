@@ -23,8 +23,8 @@ pub mod value;
 
 pub use columns::{Axis, AxisValue, Row, Settings, column};
 pub use names::{
-    Accel, EmbreeIsa, EmbreeQuality, LeafBlock, Named, NodeWidth, ObvhsQuality, PacketSize, PeerKind, SceneName,
-    Threads, ValidationStatus, Workload,
+    Accel, EmbreeIsa, EmbreePacket, EmbreeQuality, LeafBlock, Named, NodeWidth, ObvhsQuality, Packet, PeerKind,
+    SceneName, Threads, ValidationStatus, Workload,
 };
 pub use row::{Cell, Column, Kind, Role};
 pub use value::{AxisType, Raw};

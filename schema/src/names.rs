@@ -73,7 +73,7 @@ named_enum! {
         ObvhsCwbvh = "obvhs-cwbvh",
         /// Embree 4 queried one ray at a time (`rtcIntersect1` / `rtcOccluded1`).
         Embree = "embree",
-        /// Embree 4 queried in packets of 16 rays (`rtcIntersect16`) or 8 (`rtcIntersect8`), by `packet_size`.
+        /// Embree 4 queried in packets of 16 rays (`rtcIntersect16`) or 8 (`rtcIntersect8`), by `embree_packet`.
         EmbreePackets = "embree-packets",
         /// Not a peer: every ray misses at once, so its trace time is the harness's own cost per ray (never validated).
         Null = "null",
@@ -249,20 +249,38 @@ int_choice! {
 }
 
 int_choice! {
-    /// Rays the wide BVH traces together in a batch (`WideParams::PACKETS`), or Embree's packet queries
-    /// ([`PacketSize::EMBREE`]).
-    PacketSize = WideParams::PACKETS
+    /// Rays of `embree-packets`' queries: 8 (`rtcIntersect8`) or 16 (`rtcIntersect16`).
+    EmbreePacket = [8, 16]
 }
 
-impl PacketSize {
-    /// The packet sizes `embree-packets` takes: 8 (`rtcIntersect8`) and 16 (`rtcIntersect16`).
-    pub const EMBREE: &'static [u32] = &[8, 16];
-    /// `embree-packets`' packet size where the configuration names none (what it traced before it had the setting).
-    pub const EMBREE_DEFAULT: PacketSize = PacketSize(16);
+named_enum! {
+    /// How the wide BVH traces the rays of a ray set together (the tracer's `WideParams::packet`).
+    Packet {
+        /// One ray at a time.
+        Single = "single",
+        /// Packets of 8 rays with an active mask.
+        Masked8 = "masked-8",
+        /// Packets of 16 rays with an active mask.
+        Masked16 = "masked-16",
+        /// Frustum-culled packets of an 8×8 tile of camera rays.
+        Tile8x8 = "tile-8x8",
+    }
+}
 
-    /// [`PacketSize::EMBREE`] in words, for "allowed: …" messages.
-    pub fn embree_allowed() -> String {
-        Self::EMBREE.iter().map(u32::to_string).collect::<Vec<_>>().join(", ")
+impl Packet {
+    /// The rays traced together (`WideParams::PACKETS`), as the integer `packet_size` of earlier rows spelled it.
+    pub fn rays(self) -> u32 {
+        match self {
+            Packet::Single => 1,
+            Packet::Masked8 => 8,
+            Packet::Masked16 => 16,
+            Packet::Tile8x8 => 64,
+        }
+    }
+
+    /// The grouping that traces `rays` together.
+    pub fn of_rays(rays: u32) -> Option<Packet> {
+        Packet::ALL.iter().copied().find(|p| p.rays() == rays)
     }
 }
 
@@ -387,7 +405,16 @@ mod tests {
         round_trip::<EmbreeIsa>();
         round_trip::<Kernel>();
         round_trip::<ChildOrdering>();
+        round_trip::<Packet>();
         assert_eq!(Accel::ALL.len(), AccelKind::ALL.len() + PeerKind::ALL.len());
         assert!(PeerKind::from_name("embree4").is_none());
+    }
+
+    #[test]
+    fn packets_trace_the_tracers_batch_sizes() {
+        let rays: Vec<u32> = Packet::ALL.iter().map(|p| p.rays()).collect();
+        assert_eq!(rays, WideParams::PACKETS);
+        assert!(Packet::ALL.iter().all(|&p| Packet::of_rays(p.rays()) == Some(p)));
+        assert_eq!(Packet::of_rays(4), None);
     }
 }

@@ -6,7 +6,7 @@ use std::io;
 use tracer::fingerprint::Fnv64;
 
 pub use crate::columns::COLUMNS;
-use crate::columns::{Row, Settings};
+use crate::columns::{REPLACED, Replaced, Row, Settings};
 
 /// A column's type in rows and frames.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -261,8 +261,9 @@ impl fmt::Display for ReadError {
 }
 
 /// Reads every row of a `runs.csv` text. Columns are matched by name: columns this version does not know
-/// are ignored, and columns added after a file was recorded (`added` in the declaration) take their default
-/// (settings normalized); every other column must be there.
+/// are ignored, columns added after a file was recorded (`added` in the declaration) take their default, columns
+/// later formats replaced ([`REPLACED`]) set their replacements, and the settings are normalized; every other
+/// column must be there.
 pub fn read_rows(text: &str) -> Result<Vec<Row>, ReadError> {
     let mut reader = csv::ReaderBuilder::new().has_headers(true).from_reader(text.as_bytes());
     let error = |line, message: String| ReadError { line, missing_column: None, message };
@@ -273,10 +274,18 @@ pub fn read_rows(text: &str) -> Result<Vec<Row>, ReadError> {
             ..error(Some(1), format!("missing column {:?}", c.name))
         });
     }
+    let replaced: Vec<(usize, &Replaced)> =
+        REPLACED.iter().filter_map(|r| header.iter().position(|h| h == r.key).map(|i| (i, r))).collect();
     let mut rows = Vec::new();
-    for record in reader.deserialize::<Row>() {
-        let mut row: Row = record.map_err(|e| error(e.position().map(|p| p.line()), e.to_string()))?;
-        row.set_settings(&row.settings().normalized());
+    for record in reader.records() {
+        let record = record.map_err(|e| error(e.position().map(|p| p.line()), e.to_string()))?;
+        let line = record.position().map(|p| p.line());
+        let mut row: Row = record.deserialize(Some(&header)).map_err(|e| error(line, e.to_string()))?;
+        let mut settings = row.settings();
+        for (i, r) in &replaced {
+            (r.read)(&mut settings, &record[*i]);
+        }
+        row.set_settings(&settings.normalized());
         rows.push(row);
     }
     Ok(rows)

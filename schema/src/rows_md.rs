@@ -1,6 +1,6 @@
 //! `report/ROWS.md`, the row contract, generated from the declaration (a test keeps the file in step).
 
-use crate::columns::{Axis, COLUMNS};
+use crate::columns::{Axis, COLUMNS, REPLACED};
 use crate::row::{Kind, Role};
 
 /// The whole text of ROWS.md.
@@ -45,6 +45,11 @@ pub fn text() -> String {
          between repetitions; *counters* are deterministic — equal in every repetition and on every machine — and \
          are compared exactly by `harness check`; *provenance* says where and how the row was recorded.\n",
     );
+    md.push_str("\nColumns of earlier row formats, read into the settings that replaced them:\n\n");
+    for r in REPLACED {
+        let by: Vec<String> = r.by.iter().map(|a| format!("`{}`", a.key())).collect();
+        md.push_str(&format!("- `{}`: {}.\n", r.key, by.join(" and ")));
+    }
     md
 }
 

@@ -47,3 +47,32 @@ fn rows_round_trip_through_csv() {
     }
     assert_eq!(schema::row::read_rows(&written).unwrap(), rows);
 }
+
+#[test]
+fn packet_size_rows_read_as_packet_and_embree_packet() {
+    use schema::{Accel, EmbreePacket, Packet, PeerKind};
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../results/packets/runs.csv");
+    let text = std::fs::read_to_string(path).unwrap();
+    let old: Vec<String> = csv::Reader::from_reader(text.as_bytes())
+        .deserialize::<std::collections::HashMap<String, String>>()
+        .map(|r| r.unwrap()["packet_size"].clone())
+        .collect();
+    let rows = schema::row::read_rows(&text).unwrap();
+    let (mut packets, mut widths) = (std::collections::BTreeSet::new(), std::collections::BTreeSet::new());
+    for (row, old) in rows.iter().zip(&old) {
+        let rays: u32 = old.parse().unwrap();
+        match row.accel {
+            a if a.is_wide() => {
+                assert_eq!(row.packet, Packet::of_rays(rays), "{}", row.series);
+                packets.insert(rays);
+            }
+            Accel::Peer(PeerKind::EmbreePackets) => {
+                assert_eq!(row.embree_packet, EmbreePacket::new(rays), "{}", row.series);
+                widths.insert(rays);
+            }
+            _ => assert_eq!((row.packet, row.embree_packet), (None, None), "{}", row.series),
+        }
+    }
+    assert_eq!(packets.into_iter().collect::<Vec<_>>(), [1, 8, 16, 64], "every grouping is among the ids checked");
+    assert_eq!(widths.into_iter().collect::<Vec<_>>(), [8, 16]);
+}

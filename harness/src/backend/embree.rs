@@ -1,9 +1,9 @@
 //! Embree 4, loaded at run time (bindings in [`crate::peers::embree`]): `embree` queries one ray at a time
-//! (`rtcIntersect1` / `rtcOccluded1`), `embree-packets` closest hits in packets of 8 or 16 (`packet_size`).
+//! (`rtcIntersect1` / `rtcOccluded1`), `embree-packets` closest hits in packets of 8 or 16 (`embree_packet`).
 
 use std::sync::OnceLock;
 
-use schema::{Accel, Axis, PacketSize, PeerKind, Settings};
+use schema::{Accel, EmbreePacket, PeerKind, Settings};
 use tracer::accel::{Accelerator, Hit, TreeStats};
 use tracer::counters::Counters;
 use tracer::geometry::{Ray, Sphere};
@@ -35,12 +35,6 @@ impl Backend for Embree {
         .clone()
     }
 
-    /// Packets of 8 (`rtcIntersect8`) or 16 (`rtcIntersect16`) rays, not the wide BVH's other sizes.
-    fn refuses(&self, settings: &Settings) -> Option<(Axis, String)> {
-        let size = settings.packet_size.filter(|_| settings.accel == Accel::Peer(PeerKind::EmbreePackets))?;
-        (!PacketSize::EMBREE.contains(&size.0)).then(|| (Axis::packet_size, PacketSize::embree_allowed()))
-    }
-
     fn own_threads(&self) -> bool {
         true
     }
@@ -67,21 +61,21 @@ impl Backend for Embree {
         let info = format!("embree {} native width {} ({isa}), {}", i.version, i.native_packet, i.config);
         Ok(match settings.accel {
             Accel::Peer(PeerKind::EmbreePackets) => {
-                Built::peer(EmbreePackets { scene, width: EmbreePacketWidth::of(settings)? }, info)
+                Built::peer(EmbreePackets { scene, width: EmbreePacketWidth::of(settings) }, info)
             }
             _ => Built::peer(scene, info),
         })
     }
 }
 
-/// Embree queried in packets for closest hits, `rtcIntersect8` or `rtcIntersect16` (`packet_size`); occlusion stays
+/// Embree queried in packets for closest hits, `rtcIntersect8` or `rtcIntersect16` (`embree_packet`); occlusion stays
 /// `rtcOccluded1`.
 pub struct EmbreePackets {
     pub scene: EmbreeSpheres,
     pub width: EmbreePacketWidth,
 }
 
-/// The lanes of `embree-packets`' queries (`packet_size`, [`PacketSize::EMBREE`]).
+/// The lanes of `embree-packets`' queries ([`EmbreePacket`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EmbreePacketWidth {
     /// `rtcIntersect8`.
@@ -91,15 +85,11 @@ pub enum EmbreePacketWidth {
 }
 
 impl EmbreePacketWidth {
-    /// The width `settings` give `embree-packets` (normalized settings hold 8 or 16; anything else is an error).
-    pub fn of(settings: &Settings) -> Result<Self, Error> {
-        match settings.packet_size.unwrap_or(PacketSize::EMBREE_DEFAULT) {
-            PacketSize(8) => Ok(EmbreePacketWidth::Eight),
-            PacketSize(16) => Ok(EmbreePacketWidth::Sixteen),
-            PacketSize(n) => Err(Error::Run(format!(
-                "embree-packets: packet_size {n} is not allowed (allowed: {})",
-                PacketSize::embree_allowed()
-            ))),
+    /// The width `settings` give `embree-packets` (the schema allows 8 and 16; 16 where it does not apply).
+    pub fn of(settings: &Settings) -> Self {
+        match settings.embree_packet {
+            Some(EmbreePacket(8)) => EmbreePacketWidth::Eight,
+            _ => EmbreePacketWidth::Sixteen,
         }
     }
 }

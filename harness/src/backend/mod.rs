@@ -1,7 +1,7 @@
 //! Backends: what runs a configuration's `accel`. Each backend is one module implementing [`Backend`] — whether
-//! it can run here (and how to install it), which configured values it refuses, whether it needs a process of its
-//! own, and how it starts, builds and describes itself in a row — plus its entry in the schema (its `accel` names
-//! and the settings that apply to it). The rest of the harness reaches backends only through [`of`] and [`ALL`].
+//! it can run here (and how to install it), whether it needs a process of its own, and how it starts, builds and
+//! describes itself in a row — plus its entry in the schema (its `accel` names and the settings that apply to it).
+//! The rest of the harness reaches backends only through [`of`] and [`ALL`].
 //!
 //! - [`ours`]: the tracer's structures (list, pointer BVH, flat BVH, wide BVH);
 //! - [`obvhs`]: obvhs 0.4's BVH2 and CWBVH;
@@ -17,7 +17,7 @@ mod structure;
 
 use std::fmt;
 
-use schema::{Accel, Axis, Named, Settings};
+use schema::{Accel, Named, Settings};
 use tracer::geometry::Sphere;
 
 use crate::error::Error;
@@ -35,10 +35,6 @@ pub trait Backend: Sync {
     /// Whether `settings` can run on this machine (by default: whether the backend can, [`Backend::here`]).
     fn available(&self, _settings: &Settings) -> Result<(), Unavailable> {
         self.here().map(|_| ())
-    }
-    /// A configured value the schema allows but this backend cannot run: the setting and what it allows.
-    fn refuses(&self, _settings: &Settings) -> Option<(Axis, String)> {
-        None
     }
     /// False for a backend whose answers are not answers (the `null` backend): it is counted and timed, never
     /// validated (`validation = unchecked`).

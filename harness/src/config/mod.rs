@@ -10,6 +10,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use report::spec::{ClaimKind, ClaimSpec, PlotKind, PlotSpec, ReportSpec};
+use schema::columns::Replaced;
 use schema::{Axis, AxisValue, Raw};
 
 use crate::error::Error;
@@ -166,6 +167,9 @@ fn identifier(s: &Section<'_>, key: &str, name: &str, what: &str) -> Result<(), 
 fn axis_values(s: &Section<'_>, skip: &[&str]) -> Result<AxisValues, Error> {
     let mut out = AxisValues::new();
     for key in s.keys().filter(|k| !skip.contains(&k.as_str())) {
+        if let Some(replaced) = Replaced::of(key) {
+            return Err(s.error(key, replaced.instead()));
+        }
         let axis = Axis::from_key(key).ok_or_else(|| {
             let mut allowed = axis_keys();
             skip.iter().for_each(|k| allowed.push_str(&format!(", {k}")));

@@ -92,34 +92,6 @@ fn settings(values: &[AxisValue], file: Option<&SphereFile>) -> Settings {
     s
 }
 
-/// Refuses a configured value that the configuration's backend cannot run though the schema allows it (Embree's
-/// packets take 8 or 16 rays, not the wide BVH's 1), before anything is written. Checked on the configured value
-/// (`values`), with the key path of the series (`index`) or sweep that names it.
-fn check_backend_allows(
-    file: &str,
-    exp: &Experiment,
-    (index, series): (usize, &Series),
-    values: &[AxisValue],
-    configured: &Settings,
-) -> Result<(), Error> {
-    // As written: normalization replaces a value that does not apply with the backend's default.
-    let mut written = Settings::default();
-    values.iter().for_each(|v| written.set(v.clone()));
-    let Some((axis, allowed)) = backend::of(configured.accel).refuses(&written) else { return Ok(()) };
-    let value = &values[Axis::ALL.iter().position(|a| *a == axis).expect("an axis")];
-    let (path, i) = match (series.fixed.get(&axis), exp.sweep.get(&axis)) {
-        (Some(list), _) => (format!("series[{index}].{}", axis.key()), list.iter().position(|v| v == value)),
-        (None, Some(list)) => (format!("sweep.{}", axis.key()), list.iter().position(|v| v == value)),
-        (None, None) => return Ok(()), // not named: the backend's default
-    };
-    let at = i.map_or(String::new(), |i| format!("[{i}]"));
-    Err(Error::Input(format!(
-        "{file}: {path}{at}: {} is not allowed with accel {} (allowed there: {allowed})",
-        written.get(axis),
-        configured.accel.name()
-    )))
-}
-
 impl Plan {
     /// Plans `exp` for a machine with `cores` logical cores; reads the sphere file if the sweep names one.
     pub fn new(exp: &Experiment, cores: usize) -> Result<Plan, Error> {
@@ -145,7 +117,7 @@ impl Plan {
         let mut configurations = Vec::new();
         let mut seen = HashSet::new();
         let mut above_cores = Vec::new();
-        for (index, s) in series.iter().enumerate() {
+        for s in series {
             let lists: Vec<Vec<AxisValue>> = Axis::ALL
                 .iter()
                 .map(|a| s.fixed.get(a).or(exp.sweep.get(a)).cloned().unwrap_or_else(|| vec![a.default_value()]))
@@ -161,7 +133,6 @@ impl Plan {
                     continue;
                 }
                 let configured = settings(&values, sphere_file.as_ref());
-                check_backend_allows(&file, exp, (index, s), &values, &configured)?;
                 // The id is the configured settings' (machine-independent); the run resolves `all` here.
                 let id = schema::row::config_id(&s.label, &configured);
                 if seen.insert(id.clone()) {
@@ -250,7 +221,7 @@ impl Plan {
 mod tests {
     use std::path::Path;
 
-    use schema::{Named, PacketSize, PeerKind};
+    use schema::{EmbreePacket, Named, Packet, PeerKind};
     use tracer::accel::{AccelKind, Split};
     use tracer::executor::StrategyKind;
 
@@ -316,8 +287,8 @@ mod tests {
         let embree = PeerKind::EmbreePackets.name();
         let p = plan(&format!(
             "{BASE}[sweep]\nworkload = [\"render\", \"primary\"]\n[[series]]\nlabel = \"e\"\naccel = \"{embree}\"\n\
-             [[series]]\nlabel = \"e8\"\naccel = \"{embree}\"\npacket_size = 8\n\
-             [[series]]\nlabel = \"e16\"\naccel = \"{embree}\"\npacket_size = 16\n"
+             [[series]]\nlabel = \"e8\"\naccel = \"{embree}\"\nembree_packet = 8\n\
+             [[series]]\nlabel = \"e16\"\naccel = \"{embree}\"\nembree_packet = 16\n"
         ));
         let config = |label: &str, render: bool| {
             let c = p
@@ -327,27 +298,48 @@ mod tests {
             c.unwrap().clone()
         };
         for label in ["e", "e8", "e16"] {
-            assert_eq!(config(label, true).settings.packet_size, None, "{label}: renders trace one ray at a time");
+            assert_eq!(config(label, true).settings.embree_packet, None, "{label}: renders trace one ray at a time");
+            assert_eq!(config(label, false).settings.packet, None, "{label}: the wide BVH's grouping does not apply");
         }
-        assert_eq!(config("e", false).settings.packet_size, Some(PacketSize::EMBREE_DEFAULT));
-        assert_eq!(config("e8", false).settings.packet_size, Some(PacketSize(8)));
-        // The default 16 stays out of the id, so configurations recorded before embree-packets had packet_size (as
-        // not applicable, `0`) keep their ids; 8 is a configuration of its own.
+        assert_eq!(config("e", false).settings.embree_packet, Some(EmbreePacket(16)));
+        assert_eq!(config("e8", false).settings.embree_packet, Some(EmbreePacket(8)));
+        // The default 16 stays out of the id, so configurations recorded before embree-packets had a width (as not
+        // applicable, `0`) keep their ids; 8 is a configuration of its own.
         let e = config("e", false);
-        let before = Settings { packet_size: None, ..e.settings.clone() };
-        assert_eq!(e.id, schema::row::config_id("e", &before));
-        assert_eq!(before.normalized(), e.settings, "a row recorded before reads back as 16");
+        assert_eq!(e.id, schema::row::config_id("e", &Settings { embree_packet: None, ..e.settings.clone() }));
         let e8 = config("e8", false);
-        assert_ne!(
-            e8.id,
-            schema::row::config_id("e8", &Settings { packet_size: Some(PacketSize(16)), ..e8.settings.clone() })
-        );
-        // The id skips only this accel's default: the wide BVH's packets of 16 join the id as before.
-        let wide = Settings { accel: schema::Accel::Ours(AccelKind::WideBvh), ..e.settings.clone() };
-        assert_ne!(
-            schema::row::config_id("w", &wide),
-            schema::row::config_id("w", &Settings { packet_size: Some(PacketSize(1)), ..wide.clone() })
-        );
+        let as16 = Settings { embree_packet: Some(EmbreePacket(16)), ..e8.settings.clone() };
+        assert_ne!(e8.id, schema::row::config_id("e8", &as16));
+    }
+
+    #[test]
+    fn packets_keep_the_ids_they_had_as_packet_size() {
+        // What `packet_size` (1, 8, 16, 64; embree-packets 8, 16) hashed, as its last id cell unless at its default.
+        let old_id = |series: &str, s: &Settings, packet_size: Option<i64>| {
+            let mut h = tracer::fingerprint::Fnv64::default();
+            h.bytes(series.as_bytes()).bytes(b"\x1f");
+            let cells = Settings { packet: None, embree_packet: None, ..s.clone() }.id_cells();
+            for cell in cells.iter().map(ToString::to_string).chain(packet_size.map(|n| n.to_string())) {
+                h.bytes(cell.as_bytes()).bytes(b"\x1f");
+            }
+            format!("{:016x}", h.finish())
+        };
+        let wide = Settings {
+            accel: schema::Accel::Ours(AccelKind::WideBvh),
+            workload: Workload::Rays(tracer::rays::RayKind::Primary),
+            ..Settings::default()
+        }
+        .normalized();
+        for &packet in Packet::ALL {
+            let s = Settings { packet: Some(packet), ..wide.clone() };
+            let old = (packet != Packet::Single).then(|| i64::from(packet.rays()));
+            assert_eq!(schema::row::config_id("w", &s), old_id("w", &s, old), "{packet}");
+        }
+        let embree = Settings { accel: schema::Accel::Peer(PeerKind::EmbreePackets), ..wide }.normalized();
+        for (width, old) in [(8, Some(8)), (16, None)] {
+            let s = Settings { embree_packet: Some(EmbreePacket(width)), ..embree.clone() };
+            assert_eq!(schema::row::config_id("e", &s), old_id("e", &s, old), "embree-packets {width}");
+        }
     }
 
     #[test]
