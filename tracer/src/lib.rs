@@ -5,7 +5,8 @@
 //! - [`accel`] builds an acceleration structure ([`accel::List`], [`accel::Bvh`], [`accel::FlatBvh`]);
 //! - [`executor`] runs rows of an image under a parallel [`executor::Strategy`];
 //! - [`render`] shades full Whitted images or runs the primary-ray kernel;
-//! - [`rays`] holds fixed ray sets (primary, shadow, diffuse) traced identically by every backend.
+//! - [`rays`] holds fixed ray sets (primary, shadow, diffuse) traced identically by every backend;
+//! - [`agreement`] is the one definition of an answer agreeing with brute force (tolerance, f64 arbitration).
 //!
 //! With the `testing` feature (and in this crate's own tests), `testing` holds the agreement check against
 //! brute force, the ray mixes and the test scenes that every backend's tests share.
@@ -13,6 +14,7 @@
 //! The crate does no file or terminal I/O; [`render::Image::write_png`] encodes into any writer.
 
 pub mod accel;
+pub mod agreement;
 pub mod counters;
 pub mod executor;
 pub mod fingerprint;

@@ -3,8 +3,9 @@
 
 use tracer::accel::bvh::SahCosts;
 use tracer::accel::{AccelKind, AccelParams, BuiltAccel, BvhParams, Split};
+use tracer::agreement::Strictness;
 use tracer::scene::SceneKind;
-use tracer::testing::{Reference, Tolerance, sphere_ray_mix};
+use tracer::testing::{Reference, sphere_ray_mix};
 
 fn params(split: Split, traversal: f32, intersection: f32) -> BvhParams {
     BvhParams { split, leaf_size: 16, sah_costs: SahCosts { traversal, intersection }, ..BvhParams::default() }
@@ -27,7 +28,7 @@ fn dearer_node_visits_build_bigger_leaves_that_still_agree_with_brute_force() {
             reference.assert_built_agrees(
                 &format!("{} costs {traversal}/{intersection}", split.name()),
                 &tree,
-                Tolerance::RelativeToT,
+                Strictness::Identical,
             );
             leaves.push(tree.stats().leaves);
         }

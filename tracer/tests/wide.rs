@@ -10,13 +10,14 @@ use tracer::accel::wide::collapse::{PARALLEL_COLLAPSE_MIN_PRIMS, collapse};
 use tracer::accel::wide::leaf::Block;
 use tracer::accel::wide::{ChildOrdering, Kernel, WideBvh, WideParams};
 use tracer::accel::{AccelKind, AccelParams, Accelerator, BuiltAccel, BvhParams, Hit, Split};
+use tracer::agreement::Strictness;
 use tracer::counters::{NoCounters, WorkCounters};
 use tracer::executor::Strategy;
 use tracer::geometry::{Ray, Sphere};
 use tracer::rays::RaySet;
 use tracer::render::{PrimaryHits, RenderSettings, render};
 use tracer::scene::SceneKind;
-use tracer::testing::{self, Reference, Tolerance};
+use tracer::testing::{self, Reference};
 
 /// Every wide configuration this CPU runs, built over `spheres`, with its parameters.
 fn every_wide(spheres: &[Sphere]) -> impl Iterator<Item = (AccelParams, WideBvh)> + '_ {
@@ -38,7 +39,7 @@ fn every_configuration_agrees_exactly_with_brute_force_on_the_test_scenes() {
     for scene in testing::scenes() {
         let reference = Reference::new(&scene.spheres, &scene.rays);
         for (p, tree) in every_wide(&scene.spheres) {
-            reference.assert_agrees(&format!("{} {:?} {:?}", scene.label, p.wide, p.bvh), &tree, Tolerance::Exact);
+            reference.assert_agrees(&format!("{} {:?} {:?}", scene.label, p.wide, p.bvh), &tree, Strictness::Identical);
         }
     }
 }
@@ -64,7 +65,7 @@ fn degenerate_scenes_agree_exactly() {
         let rays = testing::sphere_ray_mix(spheres, 7, 400);
         let reference = Reference::new(spheres, &rays);
         for (p, tree) in every_wide(spheres) {
-            reference.assert_agrees(&format!("{label} {:?} {:?}", p.wide, p.bvh), &tree, Tolerance::Exact);
+            reference.assert_agrees(&format!("{label} {:?} {:?}", p.wide, p.bvh), &tree, Strictness::Identical);
             if spheres.is_empty() {
                 let s = tree.stats();
                 assert_eq!((s.nodes, s.leaves, s.depth), (1, 0, 0), "an empty tree is a root without children");

@@ -222,7 +222,8 @@ impl Accelerator for ObvhsCwbvh {
 mod tests {
     use super::*;
     use schema::{Named, PeerKind};
-    use tracer::testing::{Reference, Tolerance, scenes};
+    use tracer::agreement::Strictness;
+    use tracer::testing::{Reference, scenes};
 
     /// Every test scene, built at three presets: leaves call our own `Sphere::intersect`, so hit distances must
     /// be bit-identical to brute force's.
@@ -234,7 +235,7 @@ mod tests {
                 reference.assert_agrees(
                     &format!("{name} {} {}", quality.name(), scene.label),
                     &accel,
-                    Tolerance::Exact,
+                    Strictness::Identical,
                 );
             }
         }

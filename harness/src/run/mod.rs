@@ -2,7 +2,6 @@
 //! configuration), one row appended and flushed per timed repetition, then the report rebuilt.
 
 mod adaptive;
-pub mod arbitrate;
 pub mod measure;
 pub mod provenance;
 mod sweep;

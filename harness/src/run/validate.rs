@@ -1,60 +1,42 @@
-//! Validation before timing: a backend's answers to a whole ray set against a trusted reference, with f64
-//! brute force as the arbiter.
+//! Validation before timing: what is the harness's business around the tracer's one definition of agreement
+//! ([`tracer::agreement`]: the distance tolerance and f64 brute force's arbitration): choosing the reference,
+//! the sampling budgets, and counting the outcomes into a row.
 //!
 //! The reference is f32 brute force ([`List`]) for scenes of at most [`BRUTE_FORCE_MAX`] spheres, else the
 //! tracer's flat BVH (binned SAH, front-to-back). Neither is trusted blindly: before its first use, the
-//! reference's answers are checked against f64 brute force ([`super::arbitrate`]) on every ray when
-//! rays × spheres ≤ [`ARBITRATION_BUDGET`], else on at least [`SAMPLE_MIN`] rays evenly strided over the set
-//! ([`sample`]); the count is recorded as `reference_checked`, and an answer f64 does not accept fails every
-//! configuration validated against that reference (`wrong_side = reference`).
+//! reference's answers are checked against f64 brute force on every ray when rays × spheres ≤
+//! [`ARBITRATION_BUDGET`], else on at least [`SAMPLE_MIN`] rays evenly strided over the set ([`sample`]); the
+//! count is recorded as `reference_checked`, and an answer f64 does not accept fails every configuration
+//! validated against that reference (`wrong_side = reference`).
 //!
-//! A backend's answer *disagrees* with the reference's when hit/miss (or occlusion) differs, or a hit's `t`
-//! differs by more than [`t_tolerance`]: 1e-4 relative, with a floor for hits very near the ray origin (a
-//! bounce that starts inside an overlapping sphere), where a relative bound is meaningless: both distances
-//! are computed from f32 coordinates of the origin's magnitude, so the floor is [`ORIGIN_ULPS`] ulps of that
-//! magnitude (in units of the direction's length). Primitive ids are not compared (overlapping spheres may
-//! tie). Every disagreement is decided by f64 brute force: when both answers are acceptable (the ray grazes
-//! the deciding sphere within the f32 rounding bound of the ray-sphere test, or the distance lies within its
-//! root bound; see [`tracer::geometry::ExactTest`]) it is tolerated and counted as `grazing`; otherwise it
-//! counts in `mismatches`, and `wrong_side` says whose answers f64 showed wrong (`backend`, `reference` or
-//! `both`). Validation passes (`exact`) when `mismatches` is 0. More disagreements than one sample's worth
-//! are arbitrated on an evenly strided sample of that size; the rest count as mismatches.
+//! A backend's answer that does not agree with the reference's ([`Answer::agrees`]) is arbitrated
+//! ([`arbitrate`]): a tolerated disagreement counts as `grazing`; a mismatch counts in `mismatches`, and
+//! `wrong_side` says whose answers f64 showed wrong (`backend`, `reference` or `both`). Validation passes
+//! (`exact`) when `mismatches` is 0. More disagreements than one sample's worth are arbitrated on an evenly
+//! strided sample of that size; the rest count as mismatches.
 
 use std::collections::HashMap;
 use std::sync::Arc;
 
 use schema::{SceneName, Settings};
-use tracer::accel::{AccelKind, BvhParams, FlatBvh, Hit, List, Split, Traversal};
+use tracer::accel::{AccelKind, BvhParams, FlatBvh, List, Split, Traversal};
+use tracer::agreement::{Answer, BruteForce64, Outcome, Strictness, WrongSide, arbitrate};
 use tracer::counters::NoCounters;
 use tracer::executor::Strategy;
-use tracer::geometry::Ray;
+use tracer::geometry::{Ray, Sphere};
 use tracer::rays::{RayAnswers, RayKind, RaySet, trace};
-use tracer::render::PrimaryHits;
-
-use super::arbitrate::{Exact64, RayCandidates, Verdict};
-use super::measure::make_scene;
 use tracer::scene::Scene;
+
+use super::measure::make_scene;
 
 /// Largest scene validated against brute force.
 pub const BRUTE_FORCE_MAX: usize = 10_000;
-
-/// Relative tolerance on hit distances.
-pub const T_TOLERANCE: f32 = 1e-4;
-
-/// Floor of the distance tolerance, in ulps of the ray origin's largest coordinate.
-pub const ORIGIN_ULPS: f32 = 8.0;
 
 /// Rays × spheres up to which f64 brute force checks every ray of a set (about 2 s on one core).
 pub const ARBITRATION_BUDGET: u64 = 2_000_000_000;
 
 /// Fewest rays f64 brute force checks (or arbitrates) in a set, when not all of them.
 pub const SAMPLE_MIN: usize = 16_384;
-
-/// Largest accepted `|t - t_reference|` for a hit at `t` along `ray`.
-pub fn t_tolerance(ray: &tracer::geometry::Ray, t: f32) -> f32 {
-    let floor = ORIGIN_ULPS * f32::EPSILON * ray.origin.abs().max_element().max(1.0) / ray.dir.length();
-    (T_TOLERANCE * t.abs()).max(floor)
-}
 
 /// The trusted tree for larger scenes.
 pub(crate) fn reference_params() -> BvhParams {
@@ -64,24 +46,16 @@ pub(crate) fn reference_params() -> BvhParams {
 /// Indices of the rays of `set` whose answers disagree (`None` when the answers are not comparable: another
 /// kind or count).
 pub fn disagreements(set: &RaySet, reference: &RayAnswers, got: &RayAnswers) -> Option<Vec<usize>> {
-    match (reference, got) {
-        (RayAnswers::Closest(want), RayAnswers::Closest(got)) if want.len() == got.len() => Some(
-            want.iter()
-                .zip(got)
-                .zip(&set.rays)
-                .enumerate()
-                .filter(|(_, ((w, g), ray))| {
-                    let (w_hit, g_hit) = (w.prim != PrimaryHits::MISS.prim, g.prim != PrimaryHits::MISS.prim);
-                    w_hit != g_hit || (w_hit && (g.t - w.t).abs() > t_tolerance(ray, w.t))
-                })
-                .map(|(i, _)| i)
-                .collect(),
-        ),
-        (RayAnswers::Occluded(want), RayAnswers::Occluded(got)) if want.len() == got.len() => {
-            Some(want.iter().zip(got).enumerate().filter(|(_, (w, g))| w != g).map(|(i, _)| i).collect())
-        }
-        _ => None,
-    }
+    let comparable = match (reference, got) {
+        (RayAnswers::Closest(want), RayAnswers::Closest(got)) => want.len() == got.len(),
+        (RayAnswers::Occluded(want), RayAnswers::Occluded(got)) => want.len() == got.len(),
+        _ => false,
+    };
+    comparable.then(|| {
+        (0..set.rays.len())
+            .filter(|&i| !Answer::of(reference, i).agrees(&set.rays[i], &Answer::of(got, i), Strictness::Arbitrated))
+            .collect()
+    })
 }
 
 /// How many of `rays` rays f64 brute force over `spheres` spheres checks: all within [`ARBITRATION_BUDGET`],
@@ -100,18 +74,6 @@ pub fn sample(n: usize, k: usize) -> Vec<usize> {
     (0..k).map(|i| (i as u128 * n as u128 / k as u128) as usize).collect()
 }
 
-/// Answer `i` of `answers` judged by f64 brute force (`c`: ray `i`'s candidates).
-fn judge_one(c: &RayCandidates, answers: &RayAnswers, i: usize) -> Verdict {
-    match answers {
-        RayAnswers::Closest(hits) => {
-            let h: Hit = hits[i];
-            let answer = (h.prim != PrimaryHits::MISS.prim).then_some(h.t);
-            c.closest(answer, |t| t_tolerance(&c.ray, t as f32) as f64)
-        }
-        RayAnswers::Occluded(flags) => c.occluded(flags[i]),
-    }
-}
-
 /// A ray set, the reference's answers, and what f64 brute force found of them.
 #[derive(Debug)]
 pub struct Reference {
@@ -122,7 +84,7 @@ pub struct Reference {
     /// The reference's name (`list` or `flat-bvh`).
     pub name: &'static str,
     /// The scene's spheres, for f64 brute force.
-    pub exact: Arc<Exact64>,
+    pub exact: Arc<BruteForce64<Sphere>>,
     /// Rays whose reference answer f64 brute force checked.
     pub checked: usize,
     /// Those of them it did not accept.
@@ -131,14 +93,19 @@ pub struct Reference {
 
 impl Reference {
     /// Checks `answers` against f64 brute force on [`sample_size`] rays of `set`.
-    pub fn check(set: Arc<RaySet>, answers: Arc<RayAnswers>, name: &'static str, exact: Arc<Exact64>) -> Self {
+    pub fn check(
+        set: Arc<RaySet>,
+        answers: Arc<RayAnswers>,
+        name: &'static str,
+        exact: Arc<BruteForce64<Sphere>>,
+    ) -> Self {
         let picked = sample(set.rays.len(), sample_size(set.rays.len(), exact.len()));
         let rays: Vec<Ray> = picked.iter().map(|&i| set.rays[i]).collect();
         let found = exact.candidates(&rays);
         let wrong = picked
             .iter()
             .zip(&found)
-            .filter(|(i, c)| !judge_one(c, &answers, **i).acceptable())
+            .filter(|(i, c)| !c.verdict(&Answer::of(&answers, **i)).acceptable())
             .map(|(i, _)| *i)
             .collect();
         Self { set, answers, name, exact, checked: picked.len(), wrong }
@@ -176,14 +143,14 @@ pub fn judge(reference: &Reference, got: &RayAnswers) -> Judgement {
     let found = reference.exact.candidates(&rays.iter().map(|&i| reference.set.rays[i]).collect::<Vec<_>>());
     let (mut mismatches, mut grazing, mut backend_wrong, mut reference_wrong) = (unjudged, 0, false, false);
     for (&i, c) in rays.iter().zip(&found) {
-        let backend_ok = judge_one(c, got, i).acceptable();
-        let reference_ok = judge_one(c, &reference.answers, i).acceptable();
-        if backend_ok && reference_ok {
-            grazing += 1;
-        } else {
-            mismatches += 1;
-            backend_wrong |= !backend_ok;
-            reference_wrong |= !reference_ok;
+        match arbitrate(c, &Answer::of(&reference.answers, i), &Answer::of(got, i)) {
+            Outcome::Agree => {}
+            Outcome::Tolerated(_) => grazing += 1,
+            Outcome::Mismatch(side) => {
+                mismatches += 1;
+                backend_wrong |= side != WrongSide::Reference;
+                reference_wrong |= side != WrongSide::Backend;
+            }
         }
     }
     let wrong_side = match (backend_wrong || (unjudged > 0 && !reference_wrong), reference_wrong) {
@@ -206,7 +173,7 @@ type Entry = (Arc<RaySet>, Arc<RayAnswers>, &'static str);
 #[derive(Default)]
 pub struct RayBank {
     sets: HashMap<(SceneKey, RayKind), Entry>,
-    spheres: HashMap<SceneKey, Arc<Exact64>>,
+    spheres: HashMap<SceneKey, Arc<BruteForce64<Sphere>>>,
     checked: HashMap<(SceneKey, RayKind), Arc<Reference>>,
 }
 
@@ -237,7 +204,7 @@ impl RayBank {
             let answers = trace::<_, NoCounters>(&tree, &set, &Strategy::SERIAL).0;
             (set, answers, AccelKind::FlatBvh.name())
         };
-        self.spheres.entry(key.clone()).or_insert_with(|| Arc::new(Exact64::new(&scene.spheres)));
+        self.spheres.entry(key.clone()).or_insert_with(|| Arc::new(BruteForce64::new(&scene.spheres)));
         let entry = (Arc::new(set), Arc::new(answers), name);
         self.sets.insert((key, kind), entry.clone());
         entry
@@ -267,6 +234,8 @@ pub fn generate(kind: RayKind, scene: &tracer::scene::Scene, seed: u64) -> RaySe
 mod tests {
     use super::*;
     use tracer::Vec3;
+    use tracer::accel::Hit;
+    use tracer::render::PrimaryHits;
 
     fn set(rays: Vec<Ray>) -> RaySet {
         RaySet { kind: RayKind::Primary, rays }
@@ -303,8 +272,8 @@ mod tests {
 
     /// One sphere; ray 0 hits it squarely, ray 1 exactly tangent (f32 brute force hits it), ray 2 misses it by
     /// 1e-3 of its radius.
-    fn tangent_case() -> (Arc<RaySet>, Arc<RayAnswers>, Arc<Exact64>) {
-        let spheres = [tracer::geometry::Sphere::new(Vec3::new(0.0, 0.0, -10.0), 1.0)];
+    fn tangent_case() -> (Arc<RaySet>, Arc<RayAnswers>, Arc<BruteForce64<Sphere>>) {
+        let spheres = [Sphere::new(Vec3::new(0.0, 0.0, -10.0), 1.0)];
         let rays = vec![
             Ray::new(Vec3::ZERO, -Vec3::Z),
             Ray::new(Vec3::new(1.0, 0.0, 0.0), -Vec3::Z),
@@ -312,7 +281,7 @@ mod tests {
         ];
         let set = set(rays);
         let answers = trace::<_, NoCounters>(&List::build(&spheres), &set, &Strategy::SERIAL).0;
-        (Arc::new(set), Arc::new(answers), Arc::new(Exact64::new(&spheres)))
+        (Arc::new(set), Arc::new(answers), Arc::new(BruteForce64::new(&spheres)))
     }
 
     #[test]
@@ -346,13 +315,5 @@ mod tests {
         assert_eq!((got.mismatches, got.grazing, got.wrong_side), (1, 1, "reference"));
         let agrees = judge(&reference, &reference.answers);
         assert_eq!((agrees.mismatches, agrees.wrong_side), (1, "both"), "agreeing with a wrong reference");
-    }
-
-    #[test]
-    fn hits_near_the_origin_get_an_ulp_floor() {
-        let far = Ray::new(Vec3::new(14.0, 3.0, -13.0), Vec3::Y);
-        assert!(t_tolerance(&far, 2.7e-4) > 3.6e-8, "the Embree bounce case seen in peers.toml");
-        assert!(t_tolerance(&far, 2.7e-4) < 1e-4);
-        assert_eq!(t_tolerance(&Ray::new(Vec3::ZERO, Vec3::Y), 100.0), 1e-2);
     }
 }

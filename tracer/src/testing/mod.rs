@@ -1,12 +1,13 @@
 //! Test support shared by the tracer's tests and the harness's peer tests (feature `testing`).
 //!
-//! One definition of "agrees with brute force" for every backend:
+//! Every backend's tests check it against brute force with the one definition of agreement
+//! ([`crate::agreement`]), on shared configurations and rays:
 //! - [`every_tree`]: every BVH configuration the tracer can build ([`every_wide`]: the wide ones this CPU runs);
 //! - [`sphere_ray_mix`] and [`scene_ray_mix`]: ray sets that mix ordinary rays with the cases where traversal
 //!   and intersection go wrong (grazing, inside, finite, non-unit rays and secondary rays);
 //! - [`scenes`]: the generated scenes, each with its [`scene_ray_mix`];
-//! - [`Reference`]: brute force's answers to a ray set, compared with an accelerator's under a [`Tolerance`];
-//!   [`assert_every_tree_agrees`] checks every tree configuration at once.
+//! - [`Reference`]: brute force's answers to a ray set, compared with an accelerator's under a
+//!   [`crate::agreement::Strictness`]; [`assert_every_tree_agrees`] checks every tree configuration at once.
 //!
 //! Enabled for this crate's own tests and, in other crates' tests, by the `testing` feature
 //! (`tracer = { workspace = true, features = ["testing"] }` under `[dev-dependencies]`).
@@ -14,7 +15,7 @@
 mod agree;
 mod rays;
 
-pub use agree::{Comparison, Reference, Tolerance, assert_every_tree_agrees};
+pub use agree::{Comparison, Reference, assert_every_tree_agrees};
 pub use rays::{scene_ray_mix, sphere_ray_mix};
 
 use crate::accel::wide::{ChildOrdering, Kernel};

@@ -4,9 +4,10 @@ use std::path::PathBuf;
 
 use schema::{EmbreeQuality, Named};
 use tracer::accel::{Accelerator, Hit};
+use tracer::agreement::Strictness;
 use tracer::counters::NoCounters;
 use tracer::geometry::Ray;
-use tracer::testing::{Reference, TestScene, Tolerance, scenes};
+use tracer::testing::{Reference, TestScene, scenes};
 
 use super::library::SearchInputs;
 use super::*;
@@ -23,7 +24,7 @@ fn single_rays_agree_with_brute_force() {
     for TestScene { label, spheres, rays } in scenes() {
         let scene = EmbreeSpheres::build(&device, &spheres, EmbreeQuality::Medium).expect("build");
         assert_eq!(scene.stats().bytes, spheres.len() * 16);
-        Reference::new(&spheres, &rays).assert_agrees(&format!("embree {label}"), &scene, Tolerance::RelativeToScale);
+        Reference::new(&spheres, &rays).assert_agrees(&format!("embree {label}"), &scene, Strictness::Arbitrated);
     }
 }
 
@@ -34,7 +35,7 @@ fn every_build_quality_agrees() {
     let reference = Reference::new(&spheres, &rays);
     for &quality in EmbreeQuality::ALL {
         let scene = EmbreeSpheres::build(&device, &spheres, quality).expect("build");
-        reference.assert_agrees(&format!("embree {} {label}", quality.name()), &scene, Tolerance::RelativeToScale);
+        reference.assert_agrees(&format!("embree {} {label}", quality.name()), &scene, Strictness::Arbitrated);
     }
 }
 
@@ -58,8 +59,8 @@ fn check_packets<const N: usize>(
     query: impl Fn(&[Ray]) -> [Option<Hit>; N],
 ) {
     for width in [N, 7] {
-        let mut comparison = reference
-            .compare(&format!("embree intersect{N} in packets of {width} {label}"), Tolerance::RelativeToScale);
+        let mut comparison =
+            reference.compare(&format!("embree intersect{N} in packets of {width} {label}"), Strictness::Arbitrated);
         for (c, chunk) in rays.chunks(width).enumerate() {
             let got = query(chunk);
             for (lane, &hit) in got[..chunk.len()].iter().enumerate() {
@@ -179,7 +180,7 @@ fn pinned_isa_sets_the_native_packet_width() {
                 .expect(isa);
         assert_eq!(device.info().native_packet, width, "isa={isa}: {:?}", device.info());
         let scene = EmbreeSpheres::build(&device, &spheres, EmbreeQuality::Medium).expect(isa);
-        reference.assert_agrees(&format!("embree isa={isa}"), &scene, Tolerance::RelativeToScale);
+        reference.assert_agrees(&format!("embree isa={isa}"), &scene, Strictness::Arbitrated);
     }
 }
 
