@@ -9,7 +9,7 @@ use tracer::scene::SceneKind;
 
 use crate::names::{
     Accel, EmbreeIsa, EmbreePacket, EmbreeQuality, LeafBlock, NodeWidth, ObvhsQuality, Packet, PeerKind, SceneName,
-    Threads, ValidationStatus, Workload,
+    Threads, ValidationStatus, Workload, WrongSide,
 };
 use crate::row::Cell;
 
@@ -164,7 +164,7 @@ declare_columns! {
         reference_checked: u64, Validation, added 2;
         /// Which answers f64 brute force showed wrong on the rays counted in `mismatches`: `-` (none), `backend`,
         /// `reference` or `both`.
-        wrong_side: String, Validation = "-".to_string(), added 2;
+        wrong_side: WrongSide, Validation, added 2;
         /// Peer library facts (`-` for the tracer's structures).
         peer_info: String, Provenance = "-".to_string();
         /// CPU vendor as the kernel reports it (`vendor_id`).

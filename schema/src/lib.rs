@@ -24,7 +24,7 @@ pub mod value;
 pub use columns::{Axis, AxisValue, Row, Settings, column};
 pub use names::{
     Accel, EmbreeIsa, EmbreePacket, EmbreeQuality, LeafBlock, Named, NodeWidth, ObvhsQuality, Packet, PeerKind,
-    SceneName, Threads, ValidationStatus, Workload,
+    SceneName, Threads, ValidationStatus, Workload, WrongSide,
 };
 pub use row::{Cell, Column, Kind, Role};
 pub use value::{AxisType, Raw};

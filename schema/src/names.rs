@@ -112,6 +112,39 @@ impl Default for ValidationStatus {
 }
 
 named_enum! {
+    /// Whose answers f64 brute force showed wrong on the rays counted as mismatches (the `wrong_side` column).
+    WrongSide {
+        /// No mismatch.
+        Neither = "-",
+        /// The backend's.
+        Backend = "backend",
+        /// The reference's (every configuration validated against it fails).
+        Reference = "reference",
+        /// Both.
+        Both = "both",
+    }
+}
+
+impl WrongSide {
+    /// The side of the flags: whether the backend's and whether the reference's answers were shown wrong.
+    pub fn of(backend_wrong: bool, reference_wrong: bool) -> Self {
+        match (backend_wrong, reference_wrong) {
+            (false, false) => WrongSide::Neither,
+            (true, false) => WrongSide::Backend,
+            (false, true) => WrongSide::Reference,
+            (true, true) => WrongSide::Both,
+        }
+    }
+}
+
+#[allow(clippy::derivable_impls)]
+impl Default for WrongSide {
+    fn default() -> Self {
+        WrongSide::Neither
+    }
+}
+
+named_enum! {
     /// obvhs 0.4's build presets: each is `BvhBuildParams::<name>_build()` (`medium` is "around Embree's build
     /// time, faster traversal").
     ObvhsQuality { Fastest = "fastest", VeryFast = "very-fast", Fast = "fast", Medium = "medium", Slow = "slow", VerySlow = "very-slow", }

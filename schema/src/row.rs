@@ -150,12 +150,19 @@ pub trait MeasureType {
     fn cell(&self) -> Cell;
 }
 
-impl MeasureType for crate::names::ValidationStatus {
-    const KIND: Kind = Kind::Text;
-    fn cell(&self) -> Cell {
-        Cell::Text(crate::Named::name(*self).to_string())
-    }
+/// A named choice recorded as a measure (`validation`, `wrong_side`): its name.
+macro_rules! named_measure {
+    ($($t:ty),*) => {$(
+        impl MeasureType for $t {
+            const KIND: Kind = Kind::Text;
+            fn cell(&self) -> Cell {
+                Cell::Text(crate::Named::name(*self).to_string())
+            }
+        }
+    )*};
 }
+
+named_measure!(crate::names::ValidationStatus, crate::names::WrongSide);
 
 impl MeasureType for String {
     const KIND: Kind = Kind::Text;

@@ -10,7 +10,7 @@ pub mod worker;
 
 use std::path::Path;
 
-use schema::{Row, Settings, ValidationStatus, Workload};
+use schema::{Row, Settings, ValidationStatus, Workload, WrongSide};
 use tracer::counters::WorkCounters;
 use tracer::rays::RaySet;
 
@@ -139,7 +139,7 @@ struct Checked {
     /// Rays of the reference's answers checked against f64 brute force.
     reference_checked: usize,
     /// Whose answers f64 showed wrong: `-`, `backend`, `reference` or `both`.
-    wrong_side: &'static str,
+    wrong_side: WrongSide,
     rays: usize,
 }
 
@@ -154,9 +154,9 @@ impl Checked {
             self.reference,
             self.grazing,
             match self.wrong_side {
-                "both" => "backend's and the reference's",
-                "reference" => "reference's",
-                _ => "backend's",
+                WrongSide::Both => "backend's and the reference's",
+                WrongSide::Reference => "reference's",
+                WrongSide::Backend | WrongSide::Neither => "backend's",
             }
         )
     }
@@ -187,7 +187,7 @@ fn check(plan: &Plan, c: &Configuration, bank: &mut RayBank) -> Result<Checked, 
             mismatches: 0,
             grazing: 0,
             reference_checked: 0,
-            wrong_side: "-",
+            wrong_side: WrongSide::Neither,
             rays: 0,
         });
     }
@@ -275,7 +275,7 @@ fn row(r: &Recording, c: &Configuration, rep: u32, t: &Timing, v: &Checked, star
     row.mismatches = v.mismatches as u64;
     row.grazing = v.grazing as u64;
     row.reference_checked = v.reference_checked as u64;
-    row.wrong_side = v.wrong_side.to_string();
+    row.wrong_side = v.wrong_side;
     row.peer_info = t.peer_info.clone();
     // A configuration never timed (failed validation) records the kernel it was validated with.
     row.simd_kernel_used = match (t.simd_kernel.as_str(), c.settings.simd_kernel) {
@@ -412,7 +412,7 @@ mod tests {
             mismatches: 3,
             grazing: 2,
             reference_checked: 16_384,
-            wrong_side: "backend",
+            wrong_side: WrongSide::Backend,
             rays: 786_432,
         };
         let provenance = Provenance::collect();
@@ -420,7 +420,7 @@ mod tests {
         let started = Started { load: 0.5, timestamp: "t".into() };
         let row = row(&recording, &plan.configurations[0], 0, &Timing::untimed(1), &v, started);
         assert_eq!((row.validation, row.mismatches), (ValidationStatus::Failed, 3));
-        assert_eq!((row.grazing, row.reference_checked, row.wrong_side.as_str()), (2, 16_384, "backend"));
+        assert_eq!((row.grazing, row.reference_checked, row.wrong_side), (2, 16_384, WrongSide::Backend));
         let text = format!("{}\n{}", schema::row::header(), schema::row::csv_line(&row).unwrap());
         let back = &schema::row::read_rows(&text).unwrap()[0];
         let metrics =

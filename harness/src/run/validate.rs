@@ -18,9 +18,9 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use schema::{SceneName, Settings};
+use schema::{SceneName, Settings, WrongSide};
 use tracer::accel::{AccelKind, BvhParams, FlatBvh, List, Split, Traversal};
-use tracer::agreement::{Answer, BruteForce64, Outcome, Strictness, WrongSide, arbitrate};
+use tracer::agreement::{self, Answer, BruteForce64, Outcome, Strictness, arbitrate};
 use tracer::counters::NoCounters;
 use tracer::executor::Strategy;
 use tracer::geometry::{Ray, Sphere};
@@ -119,8 +119,7 @@ pub struct Judgement {
     pub mismatches: usize,
     pub grazing: usize,
     pub reference_checked: usize,
-    /// `-`, `backend`, `reference` or `both`.
-    pub wrong_side: &'static str,
+    pub wrong_side: WrongSide,
 }
 
 /// A backend's answers `got` judged against `reference`, disagreements arbitrated by f64 brute force (see the
@@ -128,7 +127,7 @@ pub struct Judgement {
 pub fn judge(reference: &Reference, got: &RayAnswers) -> Judgement {
     let n = reference.set.rays.len();
     let Some(disagree) = disagreements(&reference.set, &reference.answers, got) else {
-        let wrong_side = if reference.wrong.is_empty() { "backend" } else { "both" };
+        let wrong_side = WrongSide::of(true, !reference.wrong.is_empty());
         return Judgement { mismatches: n.max(1), grazing: 0, reference_checked: reference.checked, wrong_side };
     };
     let cap = sample_size(n, reference.exact.len());
@@ -148,17 +147,12 @@ pub fn judge(reference: &Reference, got: &RayAnswers) -> Judgement {
             Outcome::Tolerated(_) => grazing += 1,
             Outcome::Mismatch(side) => {
                 mismatches += 1;
-                backend_wrong |= side != WrongSide::Reference;
-                reference_wrong |= side != WrongSide::Backend;
+                backend_wrong |= side != agreement::WrongSide::Reference;
+                reference_wrong |= side != agreement::WrongSide::Backend;
             }
         }
     }
-    let wrong_side = match (backend_wrong || (unjudged > 0 && !reference_wrong), reference_wrong) {
-        (false, false) => "-",
-        (true, false) => "backend",
-        (false, true) => "reference",
-        (true, true) => "both",
-    };
+    let wrong_side = WrongSide::of(backend_wrong || (unjudged > 0 && !reference_wrong), reference_wrong);
     Judgement { mismatches, grazing, reference_checked: reference.checked, wrong_side }
 }
 
@@ -292,15 +286,15 @@ mod tests {
         let hit = |t| Hit { t, prim: 0 };
         let miss = PrimaryHits::MISS;
         let judged = |got: Vec<Hit>| judge(&reference, &RayAnswers::Closest(got));
-        let ok = Judgement { mismatches: 0, grazing: 0, reference_checked: 3, wrong_side: "-" };
+        let ok = Judgement { mismatches: 0, grazing: 0, reference_checked: 3, wrong_side: WrongSide::Neither };
         assert_eq!(judged(vec![hit(9.0), hit(10.0), miss]), ok);
         assert_eq!(judged(vec![hit(9.0), miss, miss]), Judgement { grazing: 1, ..ok.clone() }, "tangent: tolerated");
-        let backend = Judgement { mismatches: 1, wrong_side: "backend", ..ok.clone() };
+        let backend = Judgement { mismatches: 1, wrong_side: WrongSide::Backend, ..ok.clone() };
         assert_eq!(judged(vec![hit(9.0), hit(10.0), hit(10.0)]), backend, "a real miss");
         assert_eq!(judged(vec![hit(9.1), hit(10.0), miss]), backend, "a distance off by 1e-2");
         assert_eq!(judged(vec![miss, hit(10.0), miss]), backend);
         let flags = RayAnswers::Occluded(vec![true; 3]);
-        assert_eq!(judge(&reference, &flags).wrong_side, "backend", "not comparable");
+        assert_eq!(judge(&reference, &flags).wrong_side, WrongSide::Backend, "not comparable");
     }
 
     #[test]
@@ -312,8 +306,8 @@ mod tests {
         assert_eq!(reference.wrong, vec![2], "the tangent miss is acceptable, the hit by 1e-3 is not");
         let right = RayAnswers::Closest(vec![Hit { t: 9.0, prim: 0 }, Hit { t: 10.0, prim: 0 }, PrimaryHits::MISS]);
         let got = judge(&reference, &right);
-        assert_eq!((got.mismatches, got.grazing, got.wrong_side), (1, 1, "reference"));
+        assert_eq!((got.mismatches, got.grazing, got.wrong_side), (1, 1, WrongSide::Reference));
         let agrees = judge(&reference, &reference.answers);
-        assert_eq!((agrees.mismatches, agrees.wrong_side), (1, "both"), "agreeing with a wrong reference");
+        assert_eq!((agrees.mismatches, agrees.wrong_side), (1, WrongSide::Both), "agreeing with a wrong reference");
     }
 }
