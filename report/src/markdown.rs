@@ -38,22 +38,21 @@ pub fn report(rows: &Rows, spec: &ReportSpec, claims: &[ClaimResult]) -> String 
         md.push_str("| series | accel | scene | objects | seed | workload | threads | rays disagreeing | wrong | grazing (tolerated) | reference |
 |---|---|---|---|---|---|---|---|---|---|---|
 ");
+        let columns = [
+            column::accel,
+            column::scene,
+            column::objects,
+            column::seed,
+            column::workload,
+            column::threads,
+            column::mismatches,
+            column::wrong_side,
+            column::grazing,
+            column::validated_against,
+        ];
         for r in &rows.failed {
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                r.series(),
-                r.text(column::accel),
-                r.text(column::scene),
-                r.text(column::objects),
-                r.text(column::seed),
-                r.text(column::workload),
-                r.text(column::threads),
-                r.text(column::mismatches),
-                r.text(column::wrong_side),
-                r.text(column::grazing),
-                r.text(column::validated_against)
-            );
+            let cells: Vec<&str> = columns.iter().map(|&c| r.text(c)).collect();
+            let _ = writeln!(md, "| {} | {} |", r.series(), cells.join(" | "));
         }
         md.push('\n');
     }
