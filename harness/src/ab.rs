@@ -544,7 +544,7 @@ fn measure(
 pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
     let exp = Experiment::load(request.config)?;
     let exp = if request.quick { exp.quick() } else { exp };
-    let mut plan = Plan::new(&exp, crate::render::available_threads())?;
+    let mut plan = Plan::new(&exp, crate::plan::available_threads())?;
     plan.skip_unavailable(&exp.path.display().to_string(), false)?;
     let root = PathBuf::from(git(Path::new("."), &["rev-parse", "--show-toplevel"])?);
     let rev = git(&root, &["rev-parse", "--verify", &format!("{}^{{commit}}", request.base)])?;

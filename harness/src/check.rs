@@ -92,7 +92,7 @@ fn measure_again(run_dir: &Path, exp: &Experiment, ids: &[String], confirm_csv: 
     let text = std::fs::read_to_string(&runs).map_err(|e| Error::Input(format!("{}: {e}", runs.display())))?;
     let rows = schema::row::read_rows(&text).map_err(|e| Error::Input(format!("{}: {e}", runs.display())))?;
     let recorded = rows.iter().filter(|r| r.config_id == ids[0]).count() as u32;
-    let cores = crate::render::available_threads();
+    let cores = crate::plan::available_threads();
     let mut candidates = Vec::new();
     for variant in [exp.clone().quick(), exp.clone()] {
         let plan = Plan::new(&variant, cores)?;

@@ -5,7 +5,7 @@
 //! Each configuration is one `harness worker` process under `valgrind --tool=callgrind`, asked to time the
 //! configuration once over the worker protocol (its JSON request on stdin). Collection is off at the start
 //! (`--collect-atstart=no`) and toggled on while the thread that builds or traces is inside the phase functions
-//! `bvhlab_phase_build` and `bvhlab_phase_trace` of `run::measure` (`--toggle-collect`: callgrind toggles per
+//! `bvhlab_phase_build` and `bvhlab_phase_trace` of `backend::workload` (`--toggle-collect`: callgrind toggles per
 //! thread, on entering and on leaving), and a dump is written when each is left (`--dump-after`), so the dumps
 //! hold exactly one phase each: the scene, the ray set, the pool and the process's start are never counted.
 //! Callgrind matches these options against demangled names with `*`/`?` wildcards, and two options with the
@@ -73,7 +73,7 @@ fn uncountable(c: &Configuration) -> Option<&'static str> {
 pub fn run(request: &CountRequest<'_>) -> Result<(), Error> {
     let exp = Experiment::load(request.config)?;
     let exp = if request.quick { exp.quick() } else { exp };
-    let mut plan = Plan::new(&exp, crate::render::available_threads())?;
+    let mut plan = Plan::new(&exp, crate::plan::available_threads())?;
     plan.skip_unavailable(&exp.path.display().to_string(), false)?;
     let valgrind = valgrind_version()?;
     let dir = request.out.clone().unwrap_or_else(|| crate::run::default_dir(&exp, request.quick));
@@ -112,7 +112,7 @@ pub fn run(request: &CountRequest<'_>) -> Result<(), Error> {
         return Err(Error::Input(format!("{}: no single-thread configuration to count", exp.path.display())));
     }
     // Longest first, so the jobs finish together.
-    let cores = crate::render::available_threads();
+    let cores = crate::plan::available_threads();
     let mut order: Vec<usize> = (0..todo.len()).collect();
     let estimate = |i: usize| plan::estimate_seconds(&image_settings(todo[i], request.image), cores);
     order.sort_by(|a, b| estimate(*b).total_cmp(&estimate(*a)));
@@ -304,13 +304,13 @@ mod tests {
 
     #[test]
     fn dumps_are_read_with_and_without_a_cache_simulation() {
-        let plain = "version: 1\ncreator: callgrind-3.19.0\npart: 1\ndesc: Trigger: --dump-after=harness::run::measure::bvhlab_phase_build\n\
+        let plain = "version: 1\ncreator: callgrind-3.19.0\npart: 1\ndesc: Trigger: --dump-after=harness::backend::workload::bvhlab_phase_build\n\
                      events: Ir\nsummary: 587159\n\nfl=x\n\ntotals: 587159\n";
         assert_eq!(
             parse_dump(plain).unwrap(),
-            ("--dump-after=harness::run::measure::bvhlab_phase_build".to_string(), (587_159, None))
+            ("--dump-after=harness::backend::workload::bvhlab_phase_build".to_string(), (587_159, None))
         );
-        let cached = "desc: Trigger: --dump-after=harness::run::measure::bvhlab_phase_trace\n\
+        let cached = "desc: Trigger: --dump-after=harness::backend::workload::bvhlab_phase_trace\n\
                       events: Ir Dr Dw I1mr D1mr D1mw ILmr DLmr DLmw\n\
                       summary: 1352098363 92225131 26051 30 7702976 7925 30 1 385\n";
         assert_eq!(parse_dump(cached).unwrap().1, (1_352_098_363, Some((7_702_976 + 7925, 30 + 1 + 385))));

@@ -50,7 +50,7 @@ pub fn main() -> ExitCode {
             out: args.out.clone(),
             cache_sim: args.cache_sim,
             image: args.image,
-            jobs: args.jobs.map_or_else(render::available_threads, |j| j as usize),
+            jobs: args.jobs.map_or_else(plan::available_threads, |j| j as usize),
         }),
         Command::History(HistoryCommand::Append { run_dir, dir }) => history_append(&run_dir, &dir),
         Command::History(HistoryCommand::Plot { dir }) => report::history::plot(&dir)
@@ -125,7 +125,7 @@ fn run_command(args: &RunArgs) -> Result<(), Error> {
             )));
         }
     }
-    let mut plan = Plan::new(&exp, render::available_threads())?;
+    let mut plan = Plan::new(&exp, plan::available_threads())?;
     let mut dir = args.out.clone().unwrap_or_else(|| run::default_dir(&exp, args.quick));
     if let Some((i, n)) = shard {
         plan.keep_shard(i, n);
@@ -228,7 +228,7 @@ fn report_command(args: &ReportArgs) -> Result<(), Error> {
 
 fn validate_command(args: &ValidateArgs) -> Result<(), Error> {
     let exp = load(&args.config, args.quick)?;
-    let cores = render::available_threads();
+    let cores = plan::available_threads();
     let mut plan = Plan::new(&exp, cores)?;
     plan.skip_unavailable(&exp.path.display().to_string(), false)?;
     let seconds: f64 =

@@ -13,5 +13,5 @@ pub fn run() {
         let here = backend.here().unwrap_or_else(|e| format!("unavailable: {e}"));
         say!("{:<22} {}: {here}", backend.name(), accels.join(", "));
     }
-    say!("{:<22} {} logical cores", "threads here", crate::render::available_threads());
+    say!("{:<22} {} logical cores", "threads here", crate::plan::available_threads());
 }

@@ -205,7 +205,7 @@ pub fn run(run_dir: &Path, allow_mixed_machines: bool) -> Result<(), Error> {
     }
     let exp = Experiment::parse(&first.info.config, &first.text)?;
     let exp = if first.info.quick { exp.quick() } else { exp };
-    let plan = Plan::new(&exp, crate::render::available_threads())?;
+    let plan = Plan::new(&exp, crate::plan::available_threads())?;
     let shard_of = shard::assign(&plan, n);
     let index: HashMap<&str, usize> = plan.configurations.iter().enumerate().map(|(i, c)| (c.id.as_str(), i)).collect();
     let mut seen: HashMap<(&str, u32), usize> = HashMap::new();

@@ -10,15 +10,11 @@ use schema::columns::Replaced;
 use schema::{Axis, Named, Raw, SceneName, Settings, Workload};
 use tracer::scene::{Scene, sphere_file};
 
+use crate::backend::workload::{Output, Work};
 use crate::backend::{self, Setup};
 use crate::cli::RenderArgs;
 use crate::error::Error;
-use crate::run::measure::{Output, Work, make_scene};
-
-/// Logical cores available to this process.
-pub fn available_threads() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get())
-}
+use crate::run::measure::make_scene;
 
 /// A `--set` value as a config value: an integer, else a number, else text.
 fn raw(text: &str) -> Raw<'_> {

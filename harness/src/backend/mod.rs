@@ -14,6 +14,7 @@ mod obvhs;
 mod ours;
 mod setup;
 mod structure;
+pub mod workload;
 
 use std::fmt;
 

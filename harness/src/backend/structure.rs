@@ -6,7 +6,7 @@ use tracer::counters::{NoCounters, WorkCounters};
 use tracer::executor::Strategy;
 use tracer::rays::{RayAnswers, RaySet, trace};
 
-use crate::run::measure::{Output, Work};
+use super::workload::{Output, Work};
 
 /// A built structure of any backend.
 pub trait Structure: Send + Sync {

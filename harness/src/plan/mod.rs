@@ -20,6 +20,11 @@ use crate::error::Error;
 
 pub use estimate::estimate_seconds;
 
+/// Logical cores available to this process.
+pub fn available_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
 /// One configuration: a series label and its settings (normalized, `threads` resolved).
 #[derive(Clone, Debug)]
 pub struct Configuration {

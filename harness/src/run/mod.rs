@@ -328,7 +328,7 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, existing: Existing) -> R
     for run in &todo {
         sweep.states[run.config].pending.add(run);
     }
-    let cores = crate::render::available_threads();
+    let cores = crate::plan::available_threads();
     let model = plan.configurations.iter().map(|c| crate::plan::estimate_seconds(&c.settings, cores)).collect();
     let mut progress = Progress::new(model);
     progress.update(|config| sweep.expected(config));

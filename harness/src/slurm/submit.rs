@@ -85,7 +85,7 @@ fn print_scripts(options: &JobOptions, tasks: &[usize]) {
 /// the job ids in `RUN_DIR/slurm/jobs.json` (with `--dry-run`: prints the scripts, writes and submits nothing).
 pub fn submit(args: &SubmitArgs) -> Result<(), Error> {
     let exp = crate::load(&args.config, args.quick)?;
-    let plan = Plan::new(&exp, crate::render::available_threads())?;
+    let plan = Plan::new(&exp, crate::plan::available_threads())?;
     let (shards, cells) = (args.shards as usize, plan.cell_count());
     if shards > cells {
         return Err(Error::Input(format!(
@@ -170,7 +170,7 @@ pub fn resubmit(run_dir: &Path, dry_run: bool) -> Result<(), Error> {
             )));
         }
     }
-    let plan = Plan::new(&exp, crate::render::available_threads())?;
+    let plan = Plan::new(&exp, crate::plan::available_threads())?;
     let mut tasks = Vec::new();
     for i in 1..=o.shards {
         let missing = merge::missing_rows(&plan, &shard_dir(run_dir, i, o.shards), i, o.shards)?;
