@@ -19,20 +19,23 @@ pub const UNPACKED: &str = "unpacked";
 pub struct Manifest {
     /// The data set's name.
     pub name: String,
-    /// The registry package and version.
+    /// The registry package.
     pub package: String,
+    /// Its version.
     pub version: String,
     /// The command that downloaded it.
     pub command: String,
-    /// The archive's file name and its (checked) SHA-256.
+    /// The archive's file name.
     pub archive: String,
+    /// Its SHA-256, as checked.
     pub sha256: String,
     /// The mesh's path inside the unpacked archive.
     pub inside: String,
     /// The license the package states.
     pub license: String,
-    /// Triangles of the loaded mesh and its fingerprint (16 hex digits, `Mesh::fingerprint`).
+    /// Triangles of the loaded mesh.
     pub triangles: usize,
+    /// The loaded mesh's `Mesh::fingerprint`, 16 hex digits.
     pub fingerprint: String,
 }
 
