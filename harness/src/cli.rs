@@ -33,6 +33,9 @@ pub enum Command {
     /// Build another git revision and time both builds on a config, interleaved; report new/old ratios, and fail
     /// when the builds' answers differ.
     Ab(AbArgs),
+    /// Download a mesh data set once (pinned package, checked SHA-256) into the cache, `$BVHLAB_DATA` or
+    /// `~/.cache/bvhlab/meshes`; later runs read it offline.
+    Fetch(FetchArgs),
     /// Manage stored baselines.
     #[command(subcommand)]
     Baseline(BaselineCommand),
@@ -84,6 +87,16 @@ pub struct RunArgs {
     /// Exit with code 2 when a backend the config names is unavailable (default: skip it and say so).
     #[arg(long)]
     pub require_all: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct FetchArgs {
+    /// The data set (see `--list`).
+    #[arg(required_unless_present = "list", conflicts_with = "list")]
+    pub name: Option<String>,
+    /// List the data sets: name, triangles, package, license.
+    #[arg(long)]
+    pub list: bool,
 }
 
 #[derive(Args, Debug)]

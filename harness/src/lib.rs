@@ -14,6 +14,7 @@ mod count;
 mod error;
 mod list;
 mod merge;
+pub mod meshes;
 pub mod peers;
 mod plan;
 mod render;
@@ -72,6 +73,13 @@ pub fn main() -> ExitCode {
         Command::Slurm(SlurmCommand::Resubmit { run_dir, dry_run }) => slurm::resubmit(&run_dir, dry_run),
         Command::Merge(args) => merge::run(&args.run_dir, args.allow_mixed_machines),
         Command::RowsDiff(args) => rows::diff::run(&args.a, &args.b, args.ignore_timing),
+        Command::Fetch(args) => match &args.name {
+            Some(name) => meshes::fetch(name),
+            None => {
+                meshes::list();
+                Ok(())
+            }
+        },
         Command::List => {
             list::run();
             Ok(())

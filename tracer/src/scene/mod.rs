@@ -6,6 +6,7 @@
 
 mod camera;
 mod clustered_spheres;
+pub mod mesh;
 mod random_spheres;
 pub mod sphere_file;
 
