@@ -1,11 +1,17 @@
-//! Rays, boxes and spheres: the primitives every accelerator and renderer shares.
+//! Rays, boxes, spheres and triangles: the primitives every accelerator and renderer shares.
 
 mod aabb;
 mod exact;
+mod moller_trumbore;
 mod ray;
 mod sphere;
+mod triangle;
+mod triangle_test;
+mod watertight;
 
 pub use aabb::{Aabb, RayBoxTester};
 pub use exact::{ExactTest, F32Outcomes, U_F32, U_F64};
 pub use ray::Ray;
 pub use sphere::Sphere;
+pub use triangle::{Triangle, TriangleHit};
+pub use triangle_test::TriangleTest;
