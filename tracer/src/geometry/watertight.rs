@@ -56,3 +56,52 @@ impl Triangle {
     }
 }
 
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::geometry::{Sphere, TriangleTest, tessellate};
+    use crate::rng::SplitMix64;
+
+    /// Rays through every vertex of closed tessellated spheres and through seven points on each edge, from outside
+    /// toward the center and from the center outward: the watertight test never lets one through; Möller–Trumbore's
+    /// leaks are counted and printed.
+    #[test]
+    fn rays_through_shared_edges_and_vertices_of_a_closed_mesh_never_leak() {
+        let mut rng = SplitMix64::new(22);
+        let mut leaks = [0usize; 2];
+        let mut rays = 0;
+        for k in 0..12 {
+            let scale = [1.0, 30.0, 300.0][k % 3];
+            let center = Vec3::new(rng.range(-scale, scale) as f32, rng.range(-scale, scale) as f32, -scale as f32);
+            let sphere = Sphere::new(center, rng.range(0.05, 3.0) as f32);
+            let mesh = tessellate(&[sphere], [3, 5, 8, 16, 33, 64][k % 6]);
+            let triangles: Vec<Triangle> = mesh.triangles().collect();
+            let mut targets = mesh.positions.clone();
+            for &[a, b, c] in &mesh.indices {
+                for (p, q) in [(a, b), (b, c), (c, a)] {
+                    let (p, q) = (mesh.positions[p as usize], mesh.positions[q as usize]);
+                    targets.extend((1..8).map(|i| p.lerp(q, i as f32 / 8.0)));
+                }
+            }
+            for target in targets {
+                let outside = center + (target - center) * [1.5f32, 3.0, 10.0][rays % 3];
+                for ray in [Ray::new(outside, center - outside), Ray::new(center, target - center)] {
+                    rays += 1;
+                    for (n, test) in TriangleTest::ALL.into_iter().enumerate() {
+                        if !triangles.iter().any(|t| t.intersect(test, &ray, f32::INFINITY).is_some()) {
+                            leaks[n] += 1;
+                        }
+                    }
+                }
+            }
+        }
+        for (n, test) in TriangleTest::ALL.into_iter().enumerate() {
+            eprintln!("{}: {} leaks in {rays} rays through shared edges and vertices", test.name(), leaks[n]);
+        }
+        assert!(rays > 100_000, "{rays}");
+        assert_eq!(leaks[TriangleTest::ALL.iter().position(|&t| t == TriangleTest::Watertight).unwrap()], 0);
+        assert!(leaks.iter().all(|&l| l < rays));
+    }
+}
