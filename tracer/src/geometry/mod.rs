@@ -2,6 +2,7 @@
 
 mod aabb;
 mod exact;
+mod exact_triangle;
 mod moller_trumbore;
 mod random_triangles;
 mod ray;
@@ -14,6 +15,7 @@ mod watertight;
 
 pub use aabb::{Aabb, RayBoxTester};
 pub use exact::{ExactTest, F32Outcomes, U_F32, U_F64};
+pub use exact_triangle::ExactTriangleTest;
 pub use random_triangles::random_triangles;
 pub use ray::Ray;
 pub use sphere::Sphere;
