@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum TriangleTest {
-    /// Möller and Trumbore (1997): Cramer's rule on the edge vectors, no precomputed plane.
+    /// Möller and Trumbore (1997): Cramer's rule on the edge vectors; each triangle rounds its own edges.
     MollerTrumbore,
     /// Woop, Benthin and Wald (2013): edge functions in a sheared ray space, exact on shared edges.
     Watertight,
