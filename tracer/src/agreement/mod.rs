@@ -21,6 +21,7 @@
 mod answer;
 mod arbitrate;
 mod brute_force;
+mod chunk_box;
 mod primitive;
 mod sphere;
 mod tolerance;
