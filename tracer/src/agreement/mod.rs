@@ -16,14 +16,18 @@
 //! call our own f32 test: bit-identical answers, nothing arbitrated.
 //!
 //! A primitive kind plugs in through [`ExactPrimitive`]: its f64 test with its f32 test's rounding bound, and a
-//! layout that screens a scene's primitives per ray ([`crate::geometry::Sphere`]'s in `sphere.rs`).
+//! layout that screens a scene's primitives per ray ([`crate::geometry::Sphere`]'s in `sphere.rs`;
+//! [`crate::geometry::Triangle`]'s in `triangle.rs`, where a ray within rounding of an edge or vertex is an edge
+//! tie, tolerated as [`Tolerated::Grazing`]).
 
 mod answer;
 mod arbitrate;
 mod brute_force;
+mod chunk_box;
 mod primitive;
 mod sphere;
 mod tolerance;
+mod triangle;
 
 pub use answer::{Answer, Strictness};
 pub use arbitrate::{Outcome, Tolerated, Verdict, WrongSide, arbitrate};
@@ -31,6 +35,7 @@ pub use brute_force::{BruteForce64, Candidate, RayCandidates};
 pub use primitive::{ExactAnswer, ExactPrimitive};
 pub use sphere::SphereLayout;
 pub use tolerance::{ORIGIN_ULPS, T_TOLERANCE, t_tolerance};
+pub use triangle::TriangleLayout;
 
 use crate::geometry::Ray;
 

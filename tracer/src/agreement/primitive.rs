@@ -4,8 +4,8 @@ use std::fmt::Debug;
 
 use crate::geometry::{F32Outcomes, Ray};
 
-/// A primitive kind whose f32 ray test f64 brute force can arbitrate ([`crate::geometry::Sphere`] now; a
-/// triangle test would add its own exact test and bound, and a layout that screens triangles).
+/// A primitive kind whose f32 ray test f64 brute force can arbitrate ([`crate::geometry::Sphere`], and
+/// [`crate::geometry::Triangle`] under either [`crate::geometry::TriangleTest`]).
 pub trait ExactPrimitive: Clone + Debug + Send + Sync {
     /// A scene's primitives laid out for [`ExactPrimitive::screen`].
     type Layout: Clone + Debug + Send + Sync;

@@ -11,6 +11,7 @@
 //! f64 error (`≤ 6u₆₄·F²`); beyond `p = √2·r`, `p² − r²` outgrows `B·r²` as long as `F < 10⁶·r`, and every
 //! sphere with `F ≥ 10⁶·r` is kept. Only the kept spheres get the full evaluation ([`ExactTest::new`]).
 
+use super::chunk_box::{ChunkBox, morton_order};
 use super::{ExactAnswer, ExactPrimitive};
 use crate::geometry::{ExactTest, Ray, Sphere, U_F32, U_F64};
 
@@ -26,14 +27,13 @@ pub struct SphereLayout {
     cy: Vec<f64>,
     cz: Vec<f64>,
     r: Vec<f64>,
-    chunks: Vec<ChunkBox>,
+    chunks: Vec<SphereChunk>,
 }
 
-/// The box of a chunk's centers (center and half extents) and its largest radius.
+/// The box of a chunk's centers and its largest radius.
 #[derive(Clone, Copy, Debug)]
-struct ChunkBox {
-    center: [f64; 3],
-    half: [f64; 3],
+struct SphereChunk {
+    centers: ChunkBox,
     r_max: f64,
 }
 
@@ -75,64 +75,23 @@ impl Screen {
     }
 }
 
-impl ChunkBox {
+impl SphereChunk {
     fn of(cx: &[f64], cy: &[f64], cz: &[f64], r: &[f64]) -> Self {
-        let span = |v: &[f64]| v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| (lo.min(x), hi.max(x)));
-        let ((x0, x1), (y0, y1), (z0, z1)) = (span(cx), span(cy), span(cz));
-        Self {
-            center: [0.5 * (x0 + x1), 0.5 * (y0 + y1), 0.5 * (z0 + z1)],
-            half: [0.5 * (x1 - x0), 0.5 * (y1 - y0), 0.5 * (z1 - z0)],
-            r_max: r.iter().fold(0.0, |m, &x| m.max(x)),
-        }
+        Self { centers: ChunkBox::of(cx, cy, cz), r_max: r.iter().fold(0.0, |m, &x| m.max(x)) }
     }
 
     /// False when the ray's line misses the box widened so that it holds every sphere f32 may report
     /// (module documentation): the chunk can be skipped.
     fn may_hold_candidates(&self, s: &Screen) -> bool {
-        let rel: [f64; 3] = std::array::from_fn(|k| s.o[k] - self.center[k]);
-        let far = (rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2]).sqrt()
-            + (self.half[0] * self.half[0] + self.half[1] * self.half[1] + self.half[2] * self.half[2]).sqrt();
-        let widen = 2.0 * self.r_max + (32.0 * U_F32 + 1e-9) * far;
-        let (mut enter, mut exit) = (f64::NEG_INFINITY, f64::INFINITY);
-        #[allow(clippy::needless_range_loop)] // k indexes five per-axis arrays alike
-        for k in 0..3 {
-            let (lo, hi) = (-self.half[k] - widen - rel[k], self.half[k] + widen - rel[k]);
-            if s.n[k] == 0.0 {
-                if lo > 0.0 || hi < 0.0 {
-                    return false;
-                }
-            } else {
-                let (t0, t1) = (lo / s.n[k], hi / s.n[k]);
-                enter = enter.max(t0.min(t1));
-                exit = exit.min(t0.max(t1));
-            }
-        }
-        enter <= exit
+        self.centers.meets_line(s.o, s.n, |far| 2.0 * self.r_max + (32.0 * U_F32 + 1e-9) * far)
     }
-}
-
-/// A 30-bit Morton code of a point of the box `lo..lo + 1/scale`.
-fn morton(p: [f64; 3], lo: [f64; 3], scale: [f64; 3]) -> u32 {
-    let spread = |x: u32| {
-        let mut x = x & 0x3ff;
-        x = (x | (x << 16)) & 0x0300_00ff;
-        x = (x | (x << 8)) & 0x0300_f00f;
-        x = (x | (x << 4)) & 0x030c_30c3;
-        (x | (x << 2)) & 0x0924_9249
-    };
-    let q = |k: usize| ((p[k] - lo[k]) * scale[k]).clamp(0.0, 1023.0) as u32;
-    spread(q(0)) | (spread(q(1)) << 1) | (spread(q(2)) << 2)
 }
 
 impl SphereLayout {
     /// Lays out `spheres` for the screen.
     pub fn new(spheres: &[Sphere]) -> Self {
         let centers: Vec<[f64; 3]> = spheres.iter().map(|s| s.center.as_dvec3().to_array()).collect();
-        let lo: [f64; 3] = std::array::from_fn(|k| centers.iter().fold(f64::INFINITY, |m, c| m.min(c[k])));
-        let hi: [f64; 3] = std::array::from_fn(|k| centers.iter().fold(f64::NEG_INFINITY, |m, c| m.max(c[k])));
-        let scale: [f64; 3] = std::array::from_fn(|k| if hi[k] > lo[k] { 1023.0 / (hi[k] - lo[k]) } else { 0.0 });
-        let mut order: Vec<u32> = (0..spheres.len() as u32).collect();
-        order.sort_by_key(|&i| (morton(centers[i as usize], lo, scale), i));
+        let order = morton_order(&centers);
         let coord = |k: usize| order.iter().map(|&i| centers[i as usize][k]).collect::<Vec<f64>>();
         let (cx, cy, cz) = (coord(0), coord(1), coord(2));
         let r: Vec<f64> = order.iter().map(|&i| spheres[i as usize].radius as f64).collect();
@@ -140,7 +99,7 @@ impl SphereLayout {
             .step_by(CHUNK)
             .map(|a| {
                 let b = (a + CHUNK).min(spheres.len());
-                ChunkBox::of(&cx[a..b], &cy[a..b], &cz[a..b], &r[a..b])
+                SphereChunk::of(&cx[a..b], &cy[a..b], &cz[a..b], &r[a..b])
             })
             .collect();
         Self { order, cx, cy, cz, r, chunks }
