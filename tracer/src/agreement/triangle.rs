@@ -81,9 +81,10 @@ mod tests {
     use super::*;
     use crate::accel::Hit;
     use crate::agreement::{Answer, BruteForce64, Verdict};
-    use crate::geometry::{TriangleTest, random_triangles, tessellate};
+    use crate::geometry::TriangleTest;
     use crate::rng::SplitMix64;
     use crate::scene::SceneKind;
+    use crate::scene::{random_triangles, tessellate};
 
     /// The paper's scene tessellated (closed meshes) plus random triangles, and rays at them: through vertices and
     /// points of edges (shared edges of the closed meshes included) from random origins, through random interior

@@ -61,8 +61,9 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
-    use crate::geometry::{Sphere, TriangleTest, tessellate};
+    use crate::geometry::{Sphere, TriangleTest};
     use crate::rng::SplitMix64;
+    use crate::scene::tessellate;
 
     /// Rays through every vertex of closed tessellated spheres and through seven points on each edge, from outside
     /// toward the center and from the center outward: the watertight test never lets one through; Möller–Trumbore's

@@ -3,7 +3,7 @@
 use glam::Vec3;
 
 use crate::fingerprint::Fnv64;
-use crate::geometry::Aabb;
+use crate::geometry::{Aabb, Triangle};
 
 /// Vertex positions and the triangles over them (three indices into `positions` each).
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -18,6 +18,17 @@ impl Mesh {
     /// Number of triangles.
     pub fn triangle_count(&self) -> usize {
         self.indices.len()
+    }
+
+    /// The triangle with index `i`.
+    pub fn triangle(&self, i: usize) -> Triangle {
+        let [a, b, c] = self.indices[i].map(|k| self.positions[k as usize]);
+        Triangle::new(a, b, c)
+    }
+
+    /// Every triangle, in index order.
+    pub fn triangles(&self) -> impl ExactSizeIterator<Item = Triangle> + '_ {
+        (0..self.indices.len()).map(|i| self.triangle(i))
     }
 
     /// Bounds of all vertex positions.

@@ -8,7 +8,9 @@ mod camera;
 mod clustered_spheres;
 pub mod mesh;
 mod random_spheres;
+mod random_triangles;
 pub mod sphere_file;
+mod tessellate;
 
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -18,7 +20,9 @@ use crate::geometry::{Aabb, Sphere};
 use crate::rng::SplitMix64;
 
 pub use camera::{Camera, CameraRays};
+pub use random_triangles::random_triangles;
 pub use sphere_file::SphereFileError;
+pub use tessellate::tessellate;
 
 /// Surface description of one sphere.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

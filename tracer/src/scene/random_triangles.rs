@@ -7,16 +7,16 @@
 
 use glam::Vec3;
 
-use super::TriangleMesh;
+use super::mesh::Mesh;
 use crate::rng::SplitMix64;
 use crate::scene::{SCENE_BOX, radius_scale};
 
 /// `n` random triangles drawn from `seed` (see the module documentation).
-pub fn random_triangles(n: usize, seed: u64) -> TriangleMesh {
+pub fn random_triangles(n: usize, seed: u64) -> Mesh {
     let mut rng = SplitMix64::new(seed);
     let scale = 0.6 * radius_scale(n);
     let (lo, hi) = (SCENE_BOX.min, SCENE_BOX.max);
-    let mut mesh = TriangleMesh { positions: Vec::with_capacity(3 * n), indices: Vec::with_capacity(n) };
+    let mut mesh = Mesh { positions: Vec::with_capacity(3 * n), indices: Vec::with_capacity(n) };
     for i in 0..n as u32 {
         let s = (scale * rng.range(0.5, 1.5)).min(6.0);
         let x = rng.range(lo.x as f64, hi.x as f64);

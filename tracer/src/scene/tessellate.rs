@@ -8,7 +8,8 @@
 
 use glam::Vec3;
 
-use super::{Sphere, TriangleMesh};
+use super::mesh::Mesh;
+use crate::geometry::Sphere;
 
 /// `(cos, sin)` of `turns` full turns by the Taylor series: only `+ − × ÷`, so bit-identical everywhere.
 fn cos_sin_turns(turns: f64) -> (f64, f64) {
@@ -27,10 +28,10 @@ fn cos_sin_turns(turns: f64) -> (f64, f64) {
 }
 
 /// Every sphere as a closed UV sphere of `segments` slices (at least 3; see the module documentation).
-pub fn tessellate(spheres: &[Sphere], segments: u32) -> TriangleMesh {
+pub fn tessellate(spheres: &[Sphere], segments: u32) -> Mesh {
     let slices = segments.max(3);
     let rings = (slices / 2).max(2);
-    let mut mesh = TriangleMesh::default();
+    let mut mesh = Mesh::default();
     for s in spheres {
         let (c, r) = (s.center.as_dvec3(), s.radius as f64);
         let at = |cos_theta: f64, sin_theta: f64, (cos_phi, sin_phi): (f64, f64)| {
