@@ -40,7 +40,7 @@ fn main() {
             report("binary", pool.install(|| time(repeats, || build(&spheres, &params))));
             report("binary for blocks of 8", pool.install(|| time(repeats, || build_for_blocks(&spheres, &params, 8))));
             let built = pool.install(|| build_for_blocks(&spheres, &params, 8));
-            report("collapse 8-wide", pool.install(|| time(repeats, || collapse::<8, 8>(&built))));
+            report("collapse 8-wide", pool.install(|| time(repeats, || collapse::<_, 8, 8>(&built))));
             report("wide 8x8 (all)", pool.install(|| time(repeats, || WideBvh::build(&spheres, &params, &wide))));
         }
     }

@@ -14,7 +14,7 @@ fn empty_scene_misses_everything_and_renders() {
     let rays = testing::sphere_ray_mix(&[], 3, 60);
     testing::assert_every_tree_agrees("empty", &[], &rays);
     for params in testing::every_tree().into_iter().take(8) {
-        let accel = BuiltAccel::build(&[], &params);
+        let accel = BuiltAccel::<Sphere>::build(&[], &params);
         assert!(rays.iter().all(|r| accel.visit(MissesAll(*r))));
         assert_eq!(accel.stats().nodes, 1);
     }

@@ -133,7 +133,7 @@ fn binned_sah_is_the_same_when_large_nodes_bin_in_parallel() {
         for (tree, threads) in built.iter().zip(THREADS).skip(1) {
             assert!(tree.nodes == built[0].nodes, "blocks of {block}: nodes differ with {threads} threads");
             assert!(tree.prim_order == built[0].prim_order, "blocks of {block}: order differs with {threads} threads");
-            assert!(tree.ordered_spheres == built[0].ordered_spheres, "blocks of {block}: {threads} threads");
+            assert!(tree.ordered == built[0].ordered, "blocks of {block}: {threads} threads");
         }
     }
     // The wide tree over it collapses in parallel with a top several levels deep.

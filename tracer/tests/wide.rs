@@ -7,7 +7,7 @@
 use glam::Vec3;
 use tracer::accel::bvh::builder;
 use tracer::accel::wide::collapse::{PARALLEL_COLLAPSE_MIN_PRIMS, collapse};
-use tracer::accel::wide::leaf::Block;
+use tracer::accel::wide::leaf::SphereBlock;
 use tracer::accel::wide::{ChildOrdering, Kernel, WideBvh, WideParams};
 use tracer::accel::{AccelKind, AccelParams, Accelerator, BuiltAccel, BvhParams, Hit, Split};
 use tracer::agreement::Strictness;
@@ -315,11 +315,11 @@ fn the_sah_in_blocks_of_one_is_the_ordinary_sah_and_wider_blocks_make_bigger_lea
 /// The wide tree collapsed from `build_for_blocks` (which stops splitting at one block) against the one collapsed
 /// from the full `build_in_blocks` tree: the same nodes, and the same blocks but for the order of their lanes.
 fn assert_same_wide_tree<const W: usize, const B: usize>(label: &str, spheres: &[Sphere], bvh: &BvhParams) {
-    let full = collapse::<W, B>(&builder::build_in_blocks(spheres, bvh, B as u32));
-    let stopped = collapse::<W, B>(&builder::build_for_blocks(spheres, bvh, B as u32));
+    let full = collapse::<_, W, B>(&builder::build_in_blocks(spheres, bvh, B as u32));
+    let stopped = collapse::<_, W, B>(&builder::build_for_blocks(spheres, bvh, B as u32));
     assert!(full.nodes == stopped.nodes, "{label} W={W} B={B} {bvh:?}: nodes differ");
     assert_eq!(full.blocks.len(), stopped.blocks.len(), "{label} W={W} B={B} {bvh:?}");
-    let lanes = |b: &Block<B>| {
+    let lanes = |b: &SphereBlock<B>| {
         let mut lanes: Vec<_> =
             (0..B).map(|l| (b.ids[l], [b.cx[l], b.cy[l], b.cz[l], b.r2[l]].map(f32::to_bits))).collect();
         lanes.sort();

@@ -1,8 +1,10 @@
 //! Acceleration structures behind one small trait: closest hit and any hit (occlusion).
 //!
 //! [`List`] is the brute-force reference; [`Bvh`] is the paper's pointer tree; [`FlatBvh`] is the same
-//! tree in one array; [`WideBvh`] collapses it into 4- or 8-wide nodes with SIMD sphere leaves. [`AccelParams`] chooses and parameterizes one at run time, [`BuiltAccel`] holds it,
-//! and an [`AccelVisitor`] reaches the concrete type so that hot loops stay monomorphic.
+//! tree in one array; [`WideBvh`] collapses it into 4- or 8-wide nodes with SIMD leaves. Each is generic over the
+//! primitive ([`crate::geometry::Primitive`]: spheres, or triangles with their test). [`AccelParams`] chooses and
+//! parameterizes one at run time, [`BuiltAccel`] holds it, and an [`AccelVisitor`] reaches the concrete type so that
+//! hot loops stay monomorphic.
 
 pub mod bvh;
 mod list;
@@ -13,26 +15,27 @@ use serde::{Deserialize, Serialize};
 
 use crate::counters::Counters;
 use crate::geometry::{Ray, Sphere};
+use wide::WidePrimitive;
 
 pub use bvh::{Bvh, BvhParams, FlatBvh, Split, Traversal, TreeStats};
 pub use list::List;
 pub use null::Null;
 pub use wide::{WideBvh, WideParams};
 
-/// The closest intersection found: distance along the ray and the sphere's index in the scene.
+/// The closest intersection found: distance along the ray and the primitive's index in the scene.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     /// Ray parameter of the hit.
     pub t: f32,
-    /// Index of the sphere in the scene's sphere list.
+    /// Index of the primitive in the scene's primitive list.
     pub prim: u32,
 }
 
-/// A structure that answers ray queries over the spheres it was built from.
+/// A structure that answers ray queries over the primitives it was built from.
 pub trait Accelerator: Send + Sync {
     /// The nearest hit in `(ray.t_min, ray.t_max)`, if any.
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit>;
-    /// True when any sphere is hit in `(ray.t_min, ray.t_max)`.
+    /// True when any primitive is hit in `(ray.t_min, ray.t_max)`.
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool;
     /// Size and quality of the built structure.
     fn stats(&self) -> TreeStats;
@@ -59,14 +62,14 @@ pub trait Accelerator: Send + Sync {
 #[serde(rename_all = "kebab-case")]
 #[derive(Default)]
 pub enum AccelKind {
-    /// Brute force over every sphere.
+    /// Brute force over every primitive.
     List,
     /// The paper's pointer-based tree of boxed nodes.
     Bvh,
     /// The same tree in one contiguous array.
     #[default]
     FlatBvh,
-    /// The tree collapsed into 4- or 8-wide nodes with SIMD sphere leaves ([`WideBvh`]).
+    /// The tree collapsed into 4- or 8-wide nodes with SIMD leaves ([`WideBvh`]).
     WideBvh,
 }
 
@@ -98,17 +101,17 @@ pub struct AccelParams {
     pub wide: WideParams,
 }
 
-/// A built accelerator of any kind.
+/// A built accelerator of any kind, over primitives `P`.
 #[derive(Debug)]
-pub enum BuiltAccel {
+pub enum BuiltAccel<P: WidePrimitive = Sphere> {
     /// See [`List`].
-    List(List),
+    List(List<P>),
     /// See [`Bvh`].
-    Bvh(Bvh),
+    Bvh(Bvh<P>),
     /// See [`FlatBvh`].
-    FlatBvh(FlatBvh),
+    FlatBvh(FlatBvh<P>),
     /// See [`WideBvh`].
-    WideBvh(WideBvh),
+    WideBvh(WideBvh<P>),
 }
 
 /// Code run with the concrete accelerator type, so that its loops are compiled for that type.
@@ -119,19 +122,19 @@ pub trait AccelVisitor {
     fn visit<A: Accelerator>(self, accel: &A) -> Self::Output;
 }
 
-impl BuiltAccel {
-    /// Builds the structure `params` names over `spheres` (the tree parameters must be valid, and for `WideBvh`
+impl<P: WidePrimitive> BuiltAccel<P> {
+    /// Builds the structure `params` names over `prims` (the tree parameters must be valid, and for `WideBvh`
     /// the kernel available on this CPU: see [`WideParams::validate`]).
     ///
     /// Trees build with the threads of the current rayon pool (outside any pool: rayon's global pool), so run
     /// it inside `pool.install(..)` to choose the thread count; the tree is identical whatever the thread count
     /// (see [`bvh::builder`]).
-    pub fn build(spheres: &[Sphere], params: &AccelParams) -> Self {
+    pub fn build(prims: &[P], params: &AccelParams) -> Self {
         match params.kind {
-            AccelKind::List => BuiltAccel::List(List::build(spheres)),
-            AccelKind::Bvh => BuiltAccel::Bvh(Bvh::build(spheres, &params.bvh)),
-            AccelKind::FlatBvh => BuiltAccel::FlatBvh(FlatBvh::build(spheres, &params.bvh)),
-            AccelKind::WideBvh => BuiltAccel::WideBvh(WideBvh::build(spheres, &params.bvh, &params.wide)),
+            AccelKind::List => BuiltAccel::List(List::build(prims)),
+            AccelKind::Bvh => BuiltAccel::Bvh(Bvh::build(prims, &params.bvh)),
+            AccelKind::FlatBvh => BuiltAccel::FlatBvh(FlatBvh::build(prims, &params.bvh)),
+            AccelKind::WideBvh => BuiltAccel::WideBvh(WideBvh::build(prims, &params.bvh, &params.wide)),
         }
     }
 

@@ -9,15 +9,30 @@
 //! parallel to the plane, or such a triangle) is rejected. Each triangle rounds its own edges, so a ray through
 //! an edge shared by two triangles can slip between them.
 
+use glam::Vec3;
+
 use super::{Ray, Triangle, TriangleHit};
 
 impl Triangle {
     /// Nearest hit with `t` in `(ray.t_min, t_max)` by Möller–Trumbore (see the module documentation).
     #[inline(always)]
     pub fn intersect_moller_trumbore(&self, ray: &Ray, t_max: f32) -> Option<TriangleHit> {
+        let [p0, e1, e2, n] = self.moller_trumbore_frame();
+        Self::moller_trumbore(p0, e1, e2, n, ray, t_max)
+    }
+
+    /// What the test reads of the triangle, computed the same way whether per ray or once for a SIMD block:
+    /// `p0`, `e1 = p1 − p0`, `e2 = p2 − p0` and `n = e1 × e2`.
+    #[inline(always)]
+    pub fn moller_trumbore_frame(&self) -> [Vec3; 4] {
         let [p0, p1, p2] = self.p;
         let (e1, e2) = (p1 - p0, p2 - p0);
-        let n = e1.cross(e2);
+        [p0, e1, e2, e1.cross(e2)]
+    }
+
+    /// The test on a triangle given by [`Triangle::moller_trumbore_frame`].
+    #[inline(always)]
+    pub fn moller_trumbore(p0: Vec3, e1: Vec3, e2: Vec3, n: Vec3, ray: &Ray, t_max: f32) -> Option<TriangleHit> {
         let det = -ray.dir.dot(n);
         if det == 0.0 {
             return None;

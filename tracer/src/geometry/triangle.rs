@@ -44,6 +44,12 @@ impl Triangle {
         (self.p[0] + self.p[1] + self.p[2]) * (1.0 / 3.0)
     }
 
+    /// Unit normal of the triangle's plane on the side of `toward` (`(p1 − p0) × (p2 − p0)`, flipped if needed).
+    pub fn normal_toward(&self, toward: Vec3) -> Vec3 {
+        let n = (self.p[1] - self.p[0]).cross(self.p[2] - self.p[0]).normalize_or_zero();
+        if n.dot(toward) < 0.0 { -n } else { n }
+    }
+
     /// Nearest hit with `t` in `(ray.t_min, t_max)` by the chosen test; both cull nothing.
     #[inline(always)]
     pub fn intersect(&self, test: TriangleTest, ray: &Ray, t_max: f32) -> Option<TriangleHit> {

@@ -15,7 +15,7 @@ impl TriangleTest {
     pub const ALL: [TriangleTest; 2] = [TriangleTest::MollerTrumbore, TriangleTest::Watertight];
 
     /// The kebab-case name used in configs and on the command line.
-    pub fn name(self) -> &'static str {
+    pub const fn name(self) -> &'static str {
         match self {
             TriangleTest::MollerTrumbore => "moller-trumbore",
             TriangleTest::Watertight => "watertight",

@@ -1,35 +1,51 @@
 //! The agreement check in tests: an accelerator's answers against brute force's ([`List`]), ray by ray, under
 //! the one definition ([`crate::agreement::check`]).
 
+use crate::accel::wide::WidePrimitive;
 use crate::accel::{AccelVisitor, Accelerator, BuiltAccel, Hit, List};
-use crate::agreement::{Answer, BruteForce64, Outcome, Strictness, check};
+use crate::agreement::{Answer, BruteForce64, ExactPrimitive, Outcome, Strictness, check};
 use crate::counters::NoCounters;
-use crate::geometry::{Ray, Sphere};
+use crate::geometry::{Primitive, Ray, Sphere, Triangle, TrianglePrimitive};
 use crate::render::PrimaryHits;
 
 use super::every_tree;
 
 /// Brute force's answers (closest hit and occlusion) to a ray set, computed once and compared with any
-/// number of accelerators built over the same spheres.
+/// number of accelerators built over the same primitives (`X`: the f64 form that arbitrates, spheres or triangles).
 #[derive(Clone, Debug)]
-pub struct Reference<'a> {
+pub struct Reference<'a, X: ExactPrimitive = Sphere> {
     rays: &'a [Ray],
     closest: Vec<Option<Hit>>,
     occluded: Vec<bool>,
-    brute: BruteForce64<Sphere>,
+    brute: BruteForce64<X>,
 }
 
-impl<'a> Reference<'a> {
+impl<'a> Reference<'a, Sphere> {
     /// Traces `rays` through a [`List`] of `spheres`.
     pub fn new(spheres: &'a [Sphere], rays: &'a [Ray]) -> Self {
-        let list = List::build(spheres);
+        Self::of(spheres, spheres, rays)
+    }
+}
+
+impl<'a> Reference<'a, Triangle> {
+    /// Traces `rays` through a [`List`] of `triangles` with the test of `T`.
+    pub fn triangles<T: TrianglePrimitive>(triangles: &[Triangle], rays: &'a [Ray]) -> Self {
+        Self::of(&T::all(triangles.iter().copied()), triangles, rays)
+    }
+}
+
+impl<'a, X: ExactPrimitive> Reference<'a, X> {
+    /// Traces `rays` through a [`List`] of `prims`, whose f64 forms (same order) are `exact`.
+    pub fn of<P: Primitive>(prims: &[P], exact: &[X], rays: &'a [Ray]) -> Self {
+        assert_eq!(prims.len(), exact.len());
+        let list = List::build(prims);
         let closest = rays.iter().map(|r| list.intersect(r, &mut NoCounters)).collect();
         let occluded = rays.iter().map(|r| list.occluded(r, &mut NoCounters)).collect();
-        Self { rays, closest, occluded, brute: BruteForce64::new(spheres) }
+        Self { rays, closest, occluded, brute: BruteForce64::new(exact) }
     }
 
     /// Starts comparing answers to these rays; `what` names the backend in the failure message.
-    pub fn compare(&self, what: &str, strictness: Strictness) -> Comparison<'_, 'a> {
+    pub fn compare(&self, what: &str, strictness: Strictness) -> Comparison<'_, 'a, X> {
         Comparison { reference: self, what: what.to_owned(), strictness, bad: Vec::new(), excused: Vec::new() }
     }
 
@@ -58,9 +74,9 @@ impl<'a> Reference<'a> {
 
     /// [`Reference::assert_agrees`] for whichever structure `accel` holds.
     #[track_caller]
-    pub fn assert_built_agrees(&self, what: &str, accel: &BuiltAccel, strictness: Strictness) {
-        struct Check<'c, 'r, 'a>(&'r Reference<'a>, &'c str, Strictness);
-        impl AccelVisitor for Check<'_, '_, '_> {
+    pub fn assert_built_agrees<P: WidePrimitive>(&self, what: &str, accel: &BuiltAccel<P>, strictness: Strictness) {
+        struct Check<'c, 'r, 'a, X: ExactPrimitive>(&'r Reference<'a, X>, &'c str, Strictness);
+        impl<X: ExactPrimitive> AccelVisitor for Check<'_, '_, '_, X> {
             type Output = ();
             #[track_caller]
             fn visit<A: Accelerator>(self, accel: &A) {
@@ -75,15 +91,15 @@ impl<'a> Reference<'a> {
 /// packets); [`Comparison::finish`] fails if any disagreed.
 #[must_use = "call `finish` to fail on disagreements"]
 #[derive(Debug)]
-pub struct Comparison<'r, 'a> {
-    reference: &'r Reference<'a>,
+pub struct Comparison<'r, 'a, X: ExactPrimitive = Sphere> {
+    reference: &'r Reference<'a, X>,
     what: String,
     strictness: Strictness,
     bad: Vec<String>,
     excused: Vec<String>,
 }
 
-impl Comparison<'_, '_> {
+impl<X: ExactPrimitive> Comparison<'_, '_, X> {
     /// Compares `got` with brute force's closest hit of ray `i`.
     pub fn closest(&mut self, i: usize, got: Option<Hit>) {
         self.check(i, Answer::Closest(got));
@@ -130,13 +146,37 @@ impl Comparison<'_, '_> {
 }
 
 /// Builds every tree configuration ([`every_tree`]) over `spheres` and checks each against brute force on
-/// `rays` with [`Strictness::Identical`] (their leaves call [`Sphere::intersect`]); `label` starts the failure message, followed by the configuration.
+/// `rays` with [`Strictness::Identical`] (their leaves call [`Sphere::intersect`]); `label` starts the failure
+/// message, followed by the configuration.
 #[track_caller]
 pub fn assert_every_tree_agrees(label: &str, spheres: &[Sphere], rays: &[Ray]) {
-    let reference = Reference::new(spheres, rays);
+    assert_every_tree_agrees_over(label, spheres, &Reference::new(spheres, rays), Strictness::Identical);
+}
+
+/// [`assert_every_tree_agrees`] over `triangles` with the test of `T` (brute force runs the same test), under
+/// [`Strictness::Arbitrated`]: a ray through a vertex or edge may meet a triangle a few ulps before the box that
+/// holds it, so a tree may return the neighbour that shares the vertex, one ulp later (an edge tie f64 tolerates).
+#[track_caller]
+pub fn assert_every_tree_agrees_on_triangles<T: TrianglePrimitive + WidePrimitive>(
+    label: &str,
+    triangles: &[Triangle],
+    rays: &[Ray],
+) {
+    let prims = T::all(triangles.iter().copied());
+    let reference = Reference::triangles::<T>(triangles, rays);
+    assert_every_tree_agrees_over(&format!("{label} {}", T::NAME), &prims, &reference, Strictness::Arbitrated);
+}
+
+#[track_caller]
+fn assert_every_tree_agrees_over<P: WidePrimitive, X: ExactPrimitive>(
+    label: &str,
+    prims: &[P],
+    reference: &Reference<'_, X>,
+    strictness: Strictness,
+) {
     for params in every_tree() {
-        let accel = BuiltAccel::build(spheres, &params);
-        reference.assert_built_agrees(&format!("{label} {params:?}"), &accel, Strictness::Identical);
+        let accel = BuiltAccel::build(prims, &params);
+        reference.assert_built_agrees(&format!("{label} {params:?}"), &accel, strictness);
     }
 }
 

@@ -5,7 +5,8 @@
 //! - [`every_tree`]: every BVH configuration the tracer can build ([`every_wide`]: the wide ones this CPU runs);
 //! - [`sphere_ray_mix`] and [`scene_ray_mix`]: ray sets that mix ordinary rays with the cases where traversal
 //!   and intersection go wrong (grazing, inside, finite, non-unit rays and secondary rays);
-//! - [`scenes`]: the generated scenes, each with its [`scene_ray_mix`];
+//! - [`scenes`]: the generated scenes, each with its [`scene_ray_mix`]; [`test_meshes`]: procedural triangle
+//!   meshes, each with its [`mesh_ray_mix`];
 //! - [`Reference`]: brute force's answers to a ray set, compared with an accelerator's under a
 //!   [`crate::agreement::Strictness`]; [`assert_every_tree_agrees`] checks every tree configuration at once.
 //!
@@ -13,9 +14,11 @@
 //! (`tracer = { workspace = true, features = ["testing"] }` under `[dev-dependencies]`).
 
 mod agree;
+mod meshes;
 mod rays;
 
-pub use agree::{Comparison, Reference, assert_every_tree_agrees};
+pub use agree::{Comparison, Reference, assert_every_tree_agrees, assert_every_tree_agrees_on_triangles};
+pub use meshes::{TestMesh, mesh_ray_mix, test_meshes};
 pub use rays::{scene_ray_mix, sphere_ray_mix};
 
 use crate::accel::wide::{ChildOrdering, Kernel};

@@ -19,7 +19,7 @@ use glam::Vec3;
 
 use super::params::{BvhParams, Split};
 use super::sah::CostModel;
-use super::split::{self, Decision, NodeBounds, NodeView, PrimRef, binned_sah, object_median, prim_ref, sweep_sah};
+use super::split::{self, Decision, NodeBounds, NodeView, Referenced, binned_sah, object_median, prim_ref, sweep_sah};
 use crate::geometry::{Aabb, Sphere};
 
 /// Deepest level any builder produces; traversal stacks hold this many entries.
@@ -52,13 +52,13 @@ impl FlatNode {
 
 /// The builder's result: nodes in the array layout and the order of primitives their leaves refer to.
 #[derive(Clone, Debug)]
-pub struct BuiltTree {
+pub struct BuiltTree<P = Sphere> {
     /// Nodes; the root is `nodes[0]`.
     pub nodes: Vec<FlatNode>,
     /// Primitive ids in leaf order.
     pub prim_order: Vec<u32>,
-    /// The spheres of `prim_order`, in the same order (the builder's own copy, read in sequence).
-    pub ordered_spheres: Vec<Sphere>,
+    /// The primitives of `prim_order`, in the same order (the builder's own copy, read in sequence).
+    pub ordered: Vec<P>,
 }
 
 /// Nodes of at least this many primitives split in parallel (when the pool has more than one thread): each
@@ -74,13 +74,13 @@ pub const PARALLEL_MIN_PRIMS: usize = 4096;
 /// Builds with the threads of the current rayon pool (outside any pool: rayon's global pool); with one thread,
 /// or fewer than [`PARALLEL_MIN_PRIMS`] spheres, it is the serial recursion. The tree is identical whatever the
 /// thread count: same nodes in the same order, same primitive order.
-pub fn build(spheres: &[Sphere], params: &BvhParams) -> BuiltTree {
+pub fn build<P: Referenced>(spheres: &[P], params: &BvhParams) -> BuiltTree<P> {
     build_in_blocks(spheres, params, 1)
 }
 
 /// [`build`], with the SAH splits counting a leaf's spheres in SIMD blocks of `block` (see [`CostModel`]);
 /// `block = 1` is [`build`] exactly. The other splits ignore `block`.
-pub fn build_in_blocks(spheres: &[Sphere], params: &BvhParams, block: u32) -> BuiltTree {
+pub fn build_in_blocks<P: Referenced>(spheres: &[P], params: &BvhParams, block: u32) -> BuiltTree<P> {
     build_with(spheres, params, block, 0)
 }
 
@@ -91,12 +91,12 @@ pub fn build_in_blocks(spheres: &[Sphere], params: &BvhParams, block: u32) -> Bu
 /// thrown away (on random spheres with leaves of 4 and blocks of 8, half of the build's time), and the wide tree
 /// collapsed from this tree is the one collapsed from [`build_in_blocks`]'s, but for the order of the spheres
 /// inside a block. Embree's wide builders stop at their leaf block the same way.
-pub fn build_for_blocks(spheres: &[Sphere], params: &BvhParams, block: u32) -> BuiltTree {
+pub fn build_for_blocks<P: Referenced>(spheres: &[P], params: &BvhParams, block: u32) -> BuiltTree<P> {
     build_with(spheres, params, block, block as usize)
 }
 
 /// The build of [`build_in_blocks`], with nodes of at most `leaf_below` spheres made leaves without a decision.
-fn build_with(spheres: &[Sphere], params: &BvhParams, block: u32, leaf_below: usize) -> BuiltTree {
+fn build_with<P: Referenced>(spheres: &[P], params: &BvhParams, block: u32, leaf_below: usize) -> BuiltTree<P> {
     assert!(block >= 1, "a SIMD block holds at least one sphere");
     if let Err(e) = params.validate() {
         panic!("invalid BVH parameters: {e}");
@@ -106,15 +106,16 @@ fn build_with(spheres: &[Sphere], params: &BvhParams, block: u32, leaf_below: us
     }
     // Only the sweep reads boxes by id; the other rules read a node's spheres through its `PrimRef`s.
     let boxes: Vec<Aabb> =
-        if params.split == Split::SweepSah { spheres.iter().map(Sphere::bounds).collect() } else { Vec::new() };
-    let centroids: Vec<Vec3> = spheres.iter().map(|s| s.center).collect();
+        if params.split == Split::SweepSah { spheres.iter().map(P::bounds).collect() } else { Vec::new() };
+    let centroids: Vec<Vec3> = spheres.iter().map(P::centroid).collect();
     let inputs = Inputs { params, block, leaf_below, spheres, boxes: &boxes, centroids: &centroids };
     let mut prims: Vec<u32> = (0..spheres.len() as u32).collect();
-    let mut refs: Vec<PrimRef> = spheres.iter().map(PrimRef::new).collect();
+    let mut refs: Vec<P::Ref> = spheres.iter().map(P::reference).collect();
     let root = NodeBounds::of(&refs);
     let mut b = Builder::new(inputs, spheres.len());
     b.build_node(0, &mut prims, &mut refs, root, 0, 0);
-    BuiltTree { nodes: b.nodes, prim_order: prims, ordered_spheres: refs.iter().map(PrimRef::sphere).collect() }
+    let ordered = refs.iter().zip(&prims).map(|(r, &id)| P::from_ref(r, spheres, id)).collect();
+    BuiltTree { nodes: b.nodes, prim_order: prims, ordered }
 }
 
 fn ceil_log2(n: usize) -> usize {
@@ -124,14 +125,13 @@ fn ceil_log2(n: usize) -> usize {
 const PLACEHOLDER: FlatNode = FlatNode { bounds: Aabb::EMPTY, first: 0, prim_count: 0 };
 
 /// What every node's split decision reads: the parameters and the per-primitive spheres, boxes and centroids.
-#[derive(Clone, Copy)]
-struct Inputs<'a> {
+struct Inputs<'a, P> {
     params: &'a BvhParams,
     /// Spheres per SIMD leaf block the SAH splits count in (see [`CostModel`]).
     block: u32,
     /// Nodes of at most this many spheres are leaves, without a split decision (0: none are).
     leaf_below: usize,
-    spheres: &'a [Sphere],
+    spheres: &'a [P],
     /// Boxes by primitive id; empty unless the split is the sweep, the one rule that reads them.
     boxes: &'a [Aabb],
     centroids: &'a [Vec3],
@@ -144,7 +144,15 @@ struct Scratch {
     sweep: sweep_sah::Sweep,
 }
 
-impl Inputs<'_> {
+impl<P> Clone for Inputs<'_, P> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<P> Copy for Inputs<'_, P> {}
+
+impl<P: Referenced> Inputs<'_, P> {
     /// The SAH cost model of this build.
     #[inline(always)]
     fn costs(&self) -> CostModel {
@@ -157,7 +165,7 @@ impl Inputs<'_> {
     fn decide(
         &self,
         prims: &mut [u32],
-        refs: &mut [PrimRef],
+        refs: &mut [P::Ref],
         nb: NodeBounds,
         depth: usize,
         scratch: &mut Scratch,
@@ -206,15 +214,15 @@ impl Inputs<'_> {
 }
 
 /// The serial recursion: appends a subtree's nodes to one vector, in the order the module doc describes.
-struct Builder<'a> {
-    inputs: Inputs<'a>,
+struct Builder<'a, P> {
+    inputs: Inputs<'a, P>,
     nodes: Vec<FlatNode>,
     scratch: Scratch,
 }
 
-impl<'a> Builder<'a> {
+impl<'a, P: Referenced> Builder<'a, P> {
     /// A builder whose `nodes` hold the subtree root's slot (index 0) and room for a subtree of `prim_count`.
-    fn new(inputs: Inputs<'a>, prim_count: usize) -> Self {
+    fn new(inputs: Inputs<'a, P>, prim_count: usize) -> Self {
         let mut nodes = Vec::with_capacity(2 * prim_count.max(1));
         nodes.push(PLACEHOLDER);
         Builder { inputs, nodes, scratch: Scratch::default() }
@@ -225,7 +233,7 @@ impl<'a> Builder<'a> {
         &mut self,
         index: usize,
         prims: &mut [u32],
-        refs: &mut [PrimRef],
+        refs: &mut [P::Ref],
         nb: NodeBounds,
         offset: usize,
         depth: usize,
@@ -272,25 +280,36 @@ mod parallel {
     const PASS_CHUNK: usize = 1 << 14;
 
     /// [`super::build_with`] with the per-primitive arrays, the root's bounds and the recursion in parallel.
-    pub(super) fn build_with(spheres: &[Sphere], params: &BvhParams, block: u32, leaf_below: usize) -> BuiltTree {
+    pub(super) fn build_with<P: Referenced>(
+        spheres: &[P],
+        params: &BvhParams,
+        block: u32,
+        leaf_below: usize,
+    ) -> BuiltTree<P> {
         use rayon::prelude::*;
         let boxes: Vec<Aabb> = match params.split {
-            Split::SweepSah => spheres.par_iter().with_min_len(PASS_CHUNK).map(Sphere::bounds).collect(),
+            Split::SweepSah => spheres.par_iter().with_min_len(PASS_CHUNK).map(P::bounds).collect(),
             _ => Vec::new(),
         };
-        let centroids: Vec<Vec3> = spheres.par_iter().with_min_len(PASS_CHUNK).map(|s| s.center).collect();
+        let centroids: Vec<Vec3> = spheres.par_iter().with_min_len(PASS_CHUNK).map(P::centroid).collect();
         let inputs = Inputs { params, block, leaf_below, spheres, boxes: &boxes, centroids: &centroids };
         let mut prims: Vec<u32> = (0..spheres.len() as u32).into_par_iter().with_min_len(PASS_CHUNK).collect();
-        let mut refs: Vec<PrimRef> = spheres.par_iter().with_min_len(PASS_CHUNK).map(PrimRef::new).collect();
+        let mut refs: Vec<P::Ref> = spheres.par_iter().with_min_len(PASS_CHUNK).map(P::reference).collect();
         // The union of the chunks' bounds is that of the serial pass: minima and maxima in any order.
         let root = refs.par_chunks(PASS_CHUNK).map(NodeBounds::of).reduce_with(NodeBounds::union);
         let nodes = build(inputs, &mut prims, &mut refs, root.unwrap_or(NodeBounds::EMPTY));
-        let ordered_spheres = refs.par_iter().with_min_len(PASS_CHUNK).map(PrimRef::sphere).collect();
-        BuiltTree { nodes, prim_order: prims, ordered_spheres }
+        let ordered =
+            refs.par_iter().zip(&prims).with_min_len(PASS_CHUNK).map(|(r, &id)| P::from_ref(r, spheres, id)).collect();
+        BuiltTree { nodes, prim_order: prims, ordered }
     }
 
     /// Builds the whole tree; `prims.len() >= PARALLEL_MIN_PRIMS`.
-    fn build(inputs: Inputs<'_>, prims: &mut [u32], refs: &mut [PrimRef], nb: NodeBounds) -> Vec<FlatNode> {
+    fn build<P: Referenced>(
+        inputs: Inputs<'_, P>,
+        prims: &mut [u32],
+        refs: &mut [P::Ref],
+        nb: NodeBounds,
+    ) -> Vec<FlatNode> {
         let (root, desc) = subtree(inputs, prims, refs, nb, 0, 0);
         let mut nodes = Vec::with_capacity(1 + desc.len);
         // Descendant-relative index i is array index 1 + i.
@@ -312,10 +331,10 @@ mod parallel {
 
     /// The subtree over `prims`: its root (an interior root's `first` relative to the start of its
     /// descendants) and its descendants.
-    fn subtree(
-        inputs: Inputs<'_>,
+    fn subtree<P: Referenced>(
+        inputs: Inputs<'_, P>,
         prims: &mut [u32],
-        refs: &mut [PrimRef],
+        refs: &mut [P::Ref],
         nb: NodeBounds,
         offset: usize,
         depth: usize,

@@ -1,30 +1,31 @@
-//! The tree in one contiguous array: 32-byte nodes, spheres copied into leaf order.
+//! The tree in one contiguous array: 32-byte nodes, primitives copied into leaf order.
 
 use super::builder::{self, FlatNode};
 use super::params::{BvhParams, Traversal};
+use super::split::Referenced;
 use super::stats::TreeStats;
 use super::traverse::{self, ChildOrder, OrderedQueries, TreeView, traverse};
 use crate::accel::{Accelerator, Hit};
 use crate::counters::Counters;
 use crate::geometry::{Aabb, Ray, Sphere};
 
-/// A BVH stored as one array of [`FlatNode`]s (sibling pairs, depth-first) with spheres in leaf order.
+/// A BVH stored as one array of [`FlatNode`]s (sibling pairs, depth-first) with primitives in leaf order.
 #[derive(Clone, Debug)]
-pub struct FlatBvh {
+pub struct FlatBvh<P = Sphere> {
     nodes: Vec<FlatNode>,
-    spheres: Vec<Sphere>,
+    prims: Vec<P>,
     prim_ids: Vec<u32>,
     params: BvhParams,
 }
 
-impl FlatBvh {
+impl<P: Referenced> FlatBvh<P> {
     /// Builds the tree and lays it out.
     ///
     /// Builds with the threads of the current rayon pool (outside any pool: rayon's global pool); the tree is
     /// identical whatever the thread count (see [`builder`]).
-    pub fn build(spheres: &[Sphere], params: &BvhParams) -> Self {
-        let built = builder::build(spheres, params);
-        Self { nodes: built.nodes, spheres: built.ordered_spheres, prim_ids: built.prim_order, params: *params }
+    pub fn build(prims: &[P], params: &BvhParams) -> Self {
+        let built = builder::build(prims, params);
+        Self { nodes: built.nodes, prims: built.ordered, prim_ids: built.prim_order, params: *params }
     }
 
     /// The parameters it was built with.
@@ -47,7 +48,7 @@ impl FlatBvh {
     }
 }
 
-impl OrderedQueries for FlatBvh {
+impl<P: Referenced> OrderedQueries for FlatBvh<P> {
     #[inline(always)]
     fn traversal(&self) -> Traversal {
         self.params.traversal
@@ -59,8 +60,8 @@ impl OrderedQueries for FlatBvh {
         let mut best_t = ray.t_max;
         traverse::<_, O, C, _>(self, ray, counters, |node, t_max, counters| {
             let n = self.node(node);
-            // SAFETY: the builder makes every leaf's run lie inside `spheres` (one sphere per prim id).
-            let leaf = unsafe { self.spheres.get_unchecked(n.first as usize..(n.first + n.prim_count) as usize) };
+            // SAFETY: the builder makes every leaf's run lie inside `prims` (one primitive per prim id).
+            let leaf = unsafe { self.prims.get_unchecked(n.first as usize..(n.first + n.prim_count) as usize) };
             for (i, s) in (n.first..).zip(leaf) {
                 counters.prim_test();
                 if let Some(t) = s.intersect(ray, *t_max) {
@@ -80,7 +81,7 @@ impl OrderedQueries for FlatBvh {
         traverse::<_, O, C, _>(self, ray, counters, |node, t_max, counters| {
             let n = self.node(node);
             // SAFETY: as in `closest`.
-            let leaf = unsafe { self.spheres.get_unchecked(n.first as usize..(n.first + n.prim_count) as usize) };
+            let leaf = unsafe { self.prims.get_unchecked(n.first as usize..(n.first + n.prim_count) as usize) };
             found = leaf.iter().any(|s| {
                 counters.prim_test();
                 s.intersect(ray, *t_max).is_some()
@@ -91,7 +92,7 @@ impl OrderedQueries for FlatBvh {
     }
 }
 
-impl TreeView for FlatBvh {
+impl<P: Referenced> TreeView for FlatBvh<P> {
     type Node<'a> = u32;
 
     #[inline(always)]
@@ -115,7 +116,7 @@ impl TreeView for FlatBvh {
     }
 }
 
-impl Accelerator for FlatBvh {
+impl<P: Referenced> Accelerator for FlatBvh<P> {
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
         traverse::intersect(self, ray, counters)
     }
@@ -126,7 +127,7 @@ impl Accelerator for FlatBvh {
 
     fn stats(&self) -> TreeStats {
         let bytes = std::mem::size_of_val(self.nodes.as_slice())
-            + std::mem::size_of_val(self.spheres.as_slice())
+            + std::mem::size_of_val(self.prims.as_slice())
             + std::mem::size_of_val(self.prim_ids.as_slice());
         TreeStats::of_tree(self, bytes)
     }

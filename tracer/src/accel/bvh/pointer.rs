@@ -1,7 +1,8 @@
-//! The paper's tree: boxed nodes linked by pointers, leaves holding lists of sphere indices.
+//! The paper's tree: boxed nodes linked by pointers, leaves holding lists of primitive indices.
 
 use super::builder::{self, BuiltTree};
 use super::params::{BvhParams, Traversal};
+use super::split::Referenced;
 use super::stats::TreeStats;
 use super::traverse::{self, ChildOrder, OrderedQueries, TreeView, traverse};
 use crate::accel::{Accelerator, Hit};
@@ -27,22 +28,22 @@ pub enum BvhNodeKind {
         /// Second child.
         right: Box<BvhNode>,
     },
-    /// Indices of the spheres in the leaf.
+    /// Indices of the primitives in the leaf.
     Leaf {
-        /// Sphere indices into the scene's sphere list.
+        /// Indices into the scene's primitive list.
         prims: Vec<u32>,
     },
 }
 
-/// A BVH of boxed nodes over the spheres in scene order (the paper's layout).
+/// A BVH of boxed nodes over the primitives in scene order (the paper's layout).
 #[derive(Clone, Debug)]
-pub struct Bvh {
+pub struct Bvh<P = Sphere> {
     root: BvhNode,
-    spheres: Vec<Sphere>,
+    prims: Vec<P>,
     params: BvhParams,
 }
 
-fn boxed(tree: &BuiltTree, index: usize) -> BvhNode {
+fn boxed<P>(tree: &BuiltTree<P>, index: usize) -> BvhNode {
     let n = &tree.nodes[index];
     let kind = if n.is_leaf() {
         let range = n.first as usize..(n.first + n.prim_count) as usize;
@@ -56,14 +57,14 @@ fn boxed(tree: &BuiltTree, index: usize) -> BvhNode {
     BvhNode { bounds: n.bounds, kind }
 }
 
-impl Bvh {
+impl<P: Referenced> Bvh<P> {
     /// Builds the tree and boxes its nodes.
     ///
     /// Builds with the threads of the current rayon pool (outside any pool: rayon's global pool); the tree is
     /// identical whatever the thread count (see [`builder`]).
-    pub fn build(spheres: &[Sphere], params: &BvhParams) -> Self {
-        let built = builder::build(spheres, params);
-        Self { root: boxed(&built, 0), spheres: spheres.to_vec(), params: *params }
+    pub fn build(prims: &[P], params: &BvhParams) -> Self {
+        let built = builder::build(prims, params);
+        Self { root: boxed(&built, 0), prims: prims.to_vec(), params: *params }
     }
 
     /// The parameters it was built with.
@@ -86,7 +87,7 @@ impl Bvh {
     }
 }
 
-impl OrderedQueries for Bvh {
+impl<P: Referenced> OrderedQueries for Bvh<P> {
     #[inline(always)]
     fn traversal(&self) -> Traversal {
         self.params.traversal
@@ -99,7 +100,7 @@ impl OrderedQueries for Bvh {
             if let BvhNodeKind::Leaf { prims } = &node.kind {
                 for &p in prims {
                     counters.prim_test();
-                    if let Some(t) = self.spheres[p as usize].intersect(ray, *t_max) {
+                    if let Some(t) = self.prims[p as usize].intersect(ray, *t_max) {
                         *t_max = t;
                         best = Some(Hit { t, prim: p });
                     }
@@ -117,7 +118,7 @@ impl OrderedQueries for Bvh {
             if let BvhNodeKind::Leaf { prims } = &node.kind {
                 found = prims.iter().any(|&p| {
                     counters.prim_test();
-                    self.spheres[p as usize].intersect(ray, *t_max).is_some()
+                    self.prims[p as usize].intersect(ray, *t_max).is_some()
                 });
             }
             found
@@ -126,7 +127,7 @@ impl OrderedQueries for Bvh {
     }
 }
 
-impl TreeView for Bvh {
+impl<P: Referenced> TreeView for Bvh<P> {
     type Node<'a> = &'a BvhNode;
 
     #[inline(always)]
@@ -155,7 +156,7 @@ impl TreeView for Bvh {
     }
 }
 
-impl Accelerator for Bvh {
+impl<P: Referenced> Accelerator for Bvh<P> {
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
         traverse::intersect(self, ray, counters)
     }
@@ -166,7 +167,7 @@ impl Accelerator for Bvh {
 
     fn stats(&self) -> TreeStats {
         let bytes =
-            std::mem::size_of::<Self>() + Self::heap_bytes(&self.root) + std::mem::size_of_val(self.spheres.as_slice());
+            std::mem::size_of::<Self>() + Self::heap_bytes(&self.root) + std::mem::size_of_val(self.prims.as_slice());
         TreeStats::of_tree(self, bytes)
     }
 }

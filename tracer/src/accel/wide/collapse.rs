@@ -18,7 +18,7 @@
 
 use rayon::prelude::*;
 
-use super::leaf::Block;
+use super::leaf::{LeafBlock, WidePrimitive};
 use super::node::{ChildRef, WideNode};
 use crate::accel::bvh::builder::BuiltTree;
 use crate::geometry::{Aabb, Sphere};
@@ -34,17 +34,17 @@ pub const PARALLEL_COLLAPSE_MIN_PRIMS: usize = 1 << 13;
 
 /// A wide tree: nodes (the root first, depth-first) and the blocks their leaves refer to.
 #[derive(Clone, Debug)]
-pub struct Tree<const W: usize, const B: usize> {
+pub struct Tree<const W: usize, const B: usize, P: WidePrimitive = Sphere> {
     /// Wide nodes; the root is `nodes[0]`, and a tree always has one (without children when empty).
     pub nodes: Vec<WideNode<W>>,
     /// Leaf blocks, each leaf's blocks contiguous.
-    pub blocks: Vec<Block<B>>,
+    pub blocks: Vec<P::Block<B>>,
 }
 
 /// Collapses `built` into a `W`-wide tree with leaves in blocks of `B`.
 ///
 /// Collapses with the threads of the current rayon pool; the tree is identical whatever the thread count.
-pub fn collapse<const W: usize, const B: usize>(built: &BuiltTree) -> Tree<W, B> {
+pub fn collapse<P: WidePrimitive, const W: usize, const B: usize>(built: &BuiltTree<P>) -> Tree<W, B, P> {
     // Sphere count and first position in the primitive order of every binary subtree (children follow parents).
     let n = built.nodes.len();
     let (mut count, mut start) = (vec![0u32; n], vec![0u32; n]);
@@ -57,7 +57,7 @@ pub fn collapse<const W: usize, const B: usize>(built: &BuiltTree) -> Tree<W, B>
             (count[i], start[i]) = (count[f] + count[f + 1], start[f]);
         }
     }
-    let c = Collapser::<W, B> { built, count, start };
+    let c = Collapser::<P, W, B> { built, count, start };
     let spheres = built.prim_order.len();
     if spheres >= PARALLEL_COLLAPSE_MIN_PRIMS && rayon::current_num_threads() > 1 {
         return c.parallel();
@@ -69,49 +69,49 @@ pub fn collapse<const W: usize, const B: usize>(built: &BuiltTree) -> Tree<W, B>
 }
 
 /// Where a collapse puts its leaf blocks: the tree's vector, or a parallel task's run of it.
-trait Blocks<const B: usize> {
+trait Blocks<P: WidePrimitive, const B: usize> {
     /// Blocks put so far.
     fn len(&self) -> usize;
-    /// Puts the blocks of `spheres` (whose scene indices are `ids`) after the others; returns how many.
-    fn append(&mut self, spheres: &[Sphere], ids: &[u32]) -> usize;
+    /// Puts the blocks of `prims` (whose scene indices are `ids`) after the others; returns how many.
+    fn append(&mut self, prims: &[P], ids: &[u32]) -> usize;
 }
 
-impl<const B: usize> Blocks<B> for Vec<Block<B>> {
+impl<P: WidePrimitive, const B: usize> Blocks<P, B> for Vec<P::Block<B>> {
     fn len(&self) -> usize {
         self.len()
     }
 
-    fn append(&mut self, spheres: &[Sphere], ids: &[u32]) -> usize {
-        Block::append(self, spheres, ids)
+    fn append(&mut self, prims: &[P], ids: &[u32]) -> usize {
+        P::Block::<B>::append(self, prims, ids)
     }
 }
 
 /// A run of the tree's blocks (made as padding), filled from its start.
-struct Run<'a, const B: usize> {
-    blocks: &'a mut [Block<B>],
+struct Run<'a, P: WidePrimitive, const B: usize> {
+    blocks: &'a mut [P::Block<B>],
     len: usize,
 }
 
-impl<const B: usize> Blocks<B> for Run<'_, B> {
+impl<P: WidePrimitive, const B: usize> Blocks<P, B> for Run<'_, P, B> {
     fn len(&self) -> usize {
         self.len
     }
 
-    fn append(&mut self, spheres: &[Sphere], ids: &[u32]) -> usize {
-        let n = Block::write(&mut self.blocks[self.len..], spheres, ids);
+    fn append(&mut self, prims: &[P], ids: &[u32]) -> usize {
+        let n = P::Block::<B>::write(&mut self.blocks[self.len..], prims, ids);
         self.len += n;
         n
     }
 }
 
 /// The binary tree and its subtrees' sphere counts and first positions, shared by every task.
-struct Collapser<'a, const W: usize, const B: usize> {
-    built: &'a BuiltTree,
+struct Collapser<'a, P, const W: usize, const B: usize> {
+    built: &'a BuiltTree<P>,
     count: Vec<u32>,
     start: Vec<u32>,
 }
 
-impl<const W: usize, const B: usize> Collapser<'_, W, B> {
+impl<P: WidePrimitive, const W: usize, const B: usize> Collapser<'_, P, W, B> {
     /// True when binary node `b` is interior with more than one block's spheres.
     fn openable(&self, b: usize) -> bool {
         !self.built.nodes[b].is_leaf() && self.count[b] as usize > B
@@ -143,7 +143,7 @@ impl<const W: usize, const B: usize> Collapser<'_, W, B> {
     }
 
     /// Appends the wide node gathered from binary node `b` to `nodes` (then its descendants); returns its index.
-    fn node(&self, nodes: &mut Vec<WideNode<W>>, blocks: &mut impl Blocks<B>, b: usize) -> u32 {
+    fn node(&self, nodes: &mut Vec<WideNode<W>>, blocks: &mut impl Blocks<P, B>, b: usize) -> u32 {
         let index = nodes.len();
         nodes.push(WideNode::EMPTY);
         let (kids, len) = self.gather(b);
@@ -158,11 +158,11 @@ impl<const W: usize, const B: usize> Collapser<'_, W, B> {
     }
 
     /// Puts the blocks of binary subtree `b`'s spheres; returns the leaf.
-    fn leaf(&self, blocks: &mut impl Blocks<B>, b: usize) -> ChildRef {
+    fn leaf(&self, blocks: &mut impl Blocks<P, B>, b: usize) -> ChildRef {
         let (start, count) = (self.start[b] as usize, self.count[b] as usize);
         let first = blocks.len() as u32;
         let range = start..start + count;
-        let n = blocks.append(&self.built.ordered_spheres[range.clone()], &self.built.prim_order[range]);
+        let n = blocks.append(&self.built.ordered[range.clone()], &self.built.prim_order[range]);
         ChildRef::leaf(first, n as u32)
     }
 
@@ -181,14 +181,14 @@ impl<const W: usize, const B: usize> Collapser<'_, W, B> {
     }
 
     /// The whole tree, the wide subtrees below the top collapsed in parallel, each into its run of the blocks.
-    fn parallel(&self) -> Tree<W, B> {
+    fn parallel(&self) -> Tree<W, B, P> {
         // The tasks in serial order, each with the blocks of the top's leaves just before it; then the last leaves'.
         let (mut tasks, mut leaf_blocks) = (Vec::new(), 0);
         self.tasks(0, &mut tasks, &mut leaf_blocks);
         let counts: Vec<usize> = tasks.par_iter().map(|&(k, _)| self.block_count(k)).collect();
         let total = leaf_blocks + tasks.iter().zip(&counts).map(|(&(_, before), &n)| before + n).sum::<usize>();
         let mut blocks = Vec::with_capacity(total);
-        blocks.par_extend(rayon::iter::repeat_n(Block::PADDING, total));
+        blocks.par_extend(rayon::iter::repeat_n(P::Block::<B>::PADDING, total));
         let (mut runs, mut rest) = (Vec::with_capacity(tasks.len()), &mut blocks[..]);
         for (&(k, before), &n) in tasks.iter().zip(&counts) {
             let (run, after) = rest[before..].split_at_mut(n);
@@ -228,7 +228,7 @@ impl<const W: usize, const B: usize> Collapser<'_, W, B> {
     fn top(
         &self,
         nodes: &mut Vec<WideNode<W>>,
-        blocks: &mut Run<'_, B>,
+        blocks: &mut Run<'_, P, B>,
         b: usize,
         pieces: &mut impl Iterator<Item = (Vec<WideNode<W>>, usize)>,
     ) -> u32 {
@@ -268,7 +268,7 @@ mod tests {
 
     fn check<const W: usize, const B: usize>(spheres: &[Sphere], params: &BvhParams) {
         let built = builder::build(spheres, params);
-        let tree = collapse::<W, B>(&built);
+        let tree = collapse::<_, W, B>(&built);
         let mut seen = vec![0u32; spheres.len()];
         let mut leaves = 0;
         for (i, node) in tree.nodes.iter().enumerate() {
@@ -281,7 +281,7 @@ mod tests {
                 } else {
                     leaves += 1;
                     let blocks = &tree.blocks[child.blocks()];
-                    let real: usize = blocks.iter().map(Block::len).sum();
+                    let real: usize = blocks.iter().map(LeafBlock::len).sum();
                     assert!(
                         real <= (params.leaf_size as usize).max(B) && blocks.len() == real.div_ceil(B),
                         "blocks filled"
@@ -324,7 +324,7 @@ mod tests {
     fn nodes_fill_up_until_only_leaves_are_left() {
         let spheres = SceneKind::RandomSpheres.generate(5000, 1).spheres;
         let built = builder::build(&spheres, &BvhParams { leaf_size: 1, ..BvhParams::default() });
-        let tree = collapse::<8, 4>(&built);
+        let tree = collapse::<_, 8, 4>(&built);
         for node in &tree.nodes {
             assert!(node.len() == 8 || node.children[..node.len()].iter().all(|c| c.is_leaf()), "{node:?}");
         }

@@ -1,8 +1,8 @@
-//! A wide BVH with SIMD sphere leaves (issue #11): the binary tree collapsed into 4- or 8-wide nodes whose child
-//! boxes are tested at once, and leaves whose spheres are tested a block at a time.
+//! A wide BVH with SIMD leaves (issue #11): the binary tree collapsed into 4- or 8-wide nodes whose child boxes are
+//! tested at once, and leaves whose primitives (spheres or triangles) are tested a block at a time.
 //!
 //! - [`params`]: width, leaf block, kernel and child order ([`WideParams`]);
-//! - [`node`]: the wide node (child boxes per axis, 64-byte aligned); [`leaf`]: the sphere blocks;
+//! - [`node`]: the wide node (child boxes per axis, 64-byte aligned); [`leaf`]: the primitive blocks;
 //! - [`collapse`]: from the shared binary builder's tree (built with the SAH counting leaf blocks) to wide nodes;
 //! - [`ray`], [`order`], [`traverse`]: the traversal, generic over [`kernel`] (scalar, AVX2, AVX-512), child
 //!   order and counters; [`packet`]: packets of 8 or 16 rays with an active mask; [`tile`]: frustum-culled packets
@@ -31,6 +31,7 @@ use packet::Packets;
 use tile::Tiles;
 use traverse::{Any, AnyBatch, Closest, ClosestBatch};
 
+pub use leaf::{LeafBlock, WidePrimitive};
 pub use params::{ChildOrdering, Kernel, WideParams};
 
 use super::bvh::{BvhParams, ParamError, TreeStats, builder, sah};
@@ -41,34 +42,34 @@ use crate::geometry::{Aabb, Ray, Sphere};
 
 /// The tree in one of its layouts (width × leaf block).
 #[derive(Clone, Debug)]
-enum Layout {
-    W4B4(Tree<4, 4>),
-    W4B8(Tree<4, 8>),
-    W4B16(Tree<4, 16>),
-    W8B4(Tree<8, 4>),
-    W8B8(Tree<8, 8>),
-    W8B16(Tree<8, 16>),
+enum Layout<P: WidePrimitive> {
+    W4B4(Tree<4, 4, P>),
+    W4B8(Tree<4, 8, P>),
+    W4B16(Tree<4, 16, P>),
+    W8B4(Tree<8, 4, P>),
+    W8B8(Tree<8, 8, P>),
+    W8B16(Tree<8, 16, P>),
 }
 
-/// A wide BVH: `width`-wide nodes over leaves of `leaf_block`-sphere SIMD blocks, traversed with one kernel.
+/// A wide BVH: `width`-wide nodes over leaves of `leaf_block`-primitive SIMD blocks, traversed with one kernel.
 #[derive(Clone, Debug)]
-pub struct WideBvh {
-    layout: Layout,
+pub struct WideBvh<P: WidePrimitive = Sphere> {
+    layout: Layout<P>,
     bvh: BvhParams,
     params: WideParams,
     kernel: Kernel,
     stats: TreeStats,
 }
 
-impl WideBvh {
+impl<P: WidePrimitive> WideBvh<P> {
     /// Builds the binary tree with `bvh` (its SAH counting leaves in blocks of `wide.leaf_block`), collapses it
     /// and lays it out; refuses invalid parameters, and a kernel this CPU lacks, with the reason.
     ///
     /// Builds with the threads of the current rayon pool; the tree is identical whatever the thread count.
-    pub fn try_build(spheres: &[Sphere], bvh: &BvhParams, wide: &WideParams) -> Result<Self, ParamError> {
+    pub fn try_build(prims: &[P], bvh: &BvhParams, wide: &WideParams) -> Result<Self, ParamError> {
         bvh.validate()?;
         wide.validate()?;
-        let built = builder::build_for_blocks(spheres, bvh, wide.leaf_block);
+        let built = builder::build_for_blocks(prims, bvh, wide.leaf_block);
         let layout = match (wide.width, wide.leaf_block) {
             (4, 4) => Layout::W4B4(collapse(&built)),
             (4, 8) => Layout::W4B8(collapse(&built)),
@@ -89,8 +90,8 @@ impl WideBvh {
     }
 
     /// [`WideBvh::try_build`] for parameters known to be valid; panics with the reason otherwise.
-    pub fn build(spheres: &[Sphere], bvh: &BvhParams, wide: &WideParams) -> Self {
-        Self::try_build(spheres, bvh, wide).unwrap_or_else(|e| panic!("invalid wide BVH parameters: {e}"))
+    pub fn build(prims: &[P], bvh: &BvhParams, wide: &WideParams) -> Self {
+        Self::try_build(prims, bvh, wide).unwrap_or_else(|e| panic!("invalid wide BVH parameters: {e}"))
     }
 
     /// The same tree traversed with `kernel` (refused when this CPU lacks it).
@@ -123,7 +124,7 @@ impl WideBvh {
 
     /// A fingerprint of the laid-out tree (every node and block, bit by bit).
     pub fn tree_hash(&self) -> u64 {
-        fn hash<const W: usize, const B: usize>(t: &Tree<W, B>) -> u64 {
+        fn hash<P: WidePrimitive, const W: usize, const B: usize>(t: &Tree<W, B, P>) -> u64 {
             let mut h = Fnv64::default();
             for n in &t.nodes {
                 n.bounds.iter().flatten().for_each(|&v| _ = h.f32(v));
@@ -131,8 +132,8 @@ impl WideBvh {
                 n.octant_orders.iter().for_each(|&o| _ = h.u32(o));
             }
             for b in &t.blocks {
-                [b.cx, b.cy, b.cz, b.r2].iter().flatten().for_each(|&v| _ = h.f32(v));
-                b.ids.iter().for_each(|&id| _ = h.u32(id));
+                b.floats().for_each(|v| _ = h.f32(v));
+                b.ids().iter().for_each(|&id| _ = h.u32(id));
             }
             h.finish()
         }
@@ -174,7 +175,7 @@ impl WideBvh {
     }
 
     #[inline(always)]
-    fn ordered<Q: Query, const W: usize, const B: usize>(&self, tree: &Tree<W, B>, query: Q) -> Q::Out {
+    fn ordered<Q: Query, const W: usize, const B: usize>(&self, tree: &Tree<W, B, P>, query: Q) -> Q::Out {
         match self.params.order {
             ChildOrdering::None => self.run::<Q, Stored, W, B>(tree, query),
             ChildOrdering::Distance => self.run::<Q, Nearest, W, B>(tree, query),
@@ -183,15 +184,15 @@ impl WideBvh {
     }
 
     #[inline(always)]
-    fn run<Q: Query, O: Order, const W: usize, const B: usize>(&self, tree: &Tree<W, B>, query: Q) -> Q::Out {
+    fn run<Q: Query, O: Order, const W: usize, const B: usize>(&self, tree: &Tree<W, B, P>, query: Q) -> Q::Out {
         match self.kernel {
             // SAFETY: the kernel was validated as available on this CPU when it was chosen.
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 => unsafe { kernel::avx2::Avx2::run::<Q, O, W, B>(query, tree) },
+            Kernel::Avx2 => unsafe { kernel::avx2::Avx2::run::<Q, O, P, W, B>(query, tree) },
             // SAFETY: as above.
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx512 => unsafe { kernel::avx512::Avx512::run::<Q, O, W, B>(query, tree) },
-            _ => kernel::scalar::run::<Q, O, W, B>(query, tree),
+            Kernel::Avx512 => unsafe { kernel::avx512::Avx512::run::<Q, O, P, W, B>(query, tree) },
+            _ => kernel::scalar::run::<Q, O, P, W, B>(query, tree),
         }
     }
 }
@@ -202,7 +203,7 @@ impl WideBvh {
 /// `depth` the levels below the root of the deepest leaf, `bytes` the nodes and blocks (padding included). The SAH
 /// cost uses the binary trees' unit costs, so that it compares with theirs: 1 per wide node and 1 per sphere of a
 /// leaf, each weighted by its box's area relative to the root's (the union of the root's children).
-fn stats<const W: usize, const B: usize>(tree: &Tree<W, B>) -> TreeStats {
+fn stats<P: WidePrimitive, const W: usize, const B: usize>(tree: &Tree<W, B, P>) -> TreeStats {
     let root = &tree.nodes[0];
     let bounds = |n: &node::WideNode<W>| (0..n.len()).map(|l| n.child_bounds(l)).fold(Aabb::EMPTY, |a, b| a.union(&b));
     let root_area = bounds(root).surface_area() as f64;
@@ -223,7 +224,7 @@ fn stats<const W: usize, const B: usize>(tree: &Tree<W, B>) -> TreeStats {
                 s.nodes += 1;
                 s.leaves += 1;
                 s.depth = s.depth.max(depth + 1);
-                let spheres: usize = tree.blocks[child.blocks()].iter().map(leaf::Block::len).sum();
+                let spheres: usize = tree.blocks[child.blocks()].iter().map(LeafBlock::len).sum();
                 s.sah_cost +=
                     sah::leaf_cost(spheres) as f64 * node.child_bounds(lane).surface_area() as f64 / root_area;
             }
@@ -232,7 +233,7 @@ fn stats<const W: usize, const B: usize>(tree: &Tree<W, B>) -> TreeStats {
     s
 }
 
-impl Accelerator for WideBvh {
+impl<P: WidePrimitive> Accelerator for WideBvh<P> {
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
         self.dispatch(Closest { ray, counters })
     }

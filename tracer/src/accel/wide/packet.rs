@@ -23,7 +23,7 @@ use std::mem::MaybeUninit;
 
 use super::collapse::Tree;
 use super::kernel::{Ops, Query};
-use super::leaf::PAD;
+use super::leaf::{LeafBlock, PAD, WidePrimitive};
 use super::node::{ChildRef, WideNode};
 use super::order::Order;
 use super::ray::RayLanes;
@@ -182,8 +182,8 @@ impl<'a, const W: usize, const P: usize> Visit<'a, W, P> {
     /// # Safety
     /// `node` is a node of `tree`.
     #[inline(always)]
-    unsafe fn new<const B: usize>(
-        tree: &'a Tree<W, B>,
+    unsafe fn new<Prim: WidePrimitive, const B: usize>(
+        tree: &'a Tree<W, B, Prim>,
         node: ChildRef,
         active: u64,
         packet: &'a Packet<P>,
@@ -234,8 +234,16 @@ pub(super) trait Answer: Sized {
     ///
     /// # Safety
     /// The CPU supports `K`'s instructions.
-    unsafe fn traverse<K: Ops, C: Counters, E: Enter<P>, const W: usize, const B: usize, const P: usize>(
-        tree: &Tree<W, B>,
+    unsafe fn traverse<
+        K: Ops,
+        C: Counters,
+        E: Enter<P>,
+        Prim: WidePrimitive,
+        const W: usize,
+        const B: usize,
+        const P: usize,
+    >(
+        tree: &Tree<W, B, Prim>,
         packet: &mut Packet<P>,
         enter: E,
         out: &mut [Self],
@@ -246,8 +254,16 @@ pub(super) trait Answer: Sized {
 /// Nearest hits ([`PrimaryHits::MISS`] for misses).
 impl Answer for Hit {
     #[inline(always)]
-    unsafe fn traverse<K: Ops, C: Counters, E: Enter<P>, const W: usize, const B: usize, const P: usize>(
-        tree: &Tree<W, B>,
+    unsafe fn traverse<
+        K: Ops,
+        C: Counters,
+        E: Enter<P>,
+        Prim: WidePrimitive,
+        const W: usize,
+        const B: usize,
+        const P: usize,
+    >(
+        tree: &Tree<W, B, Prim>,
         packet: &mut Packet<P>,
         mut enter: E,
         out: &mut [Hit],
@@ -266,7 +282,7 @@ impl Answer for Hit {
                 continue;
             }
             // SAFETY: forwarded from the caller.
-            if unsafe { leaf_closest::<K, C, W, B, P>(tree, e.child, active, packet, counters) } {
+            if unsafe { leaf_closest::<K, C, Prim, W, B, P>(tree, e.child, active, packet, counters) } {
                 enter.nearer(&packet.t_max);
             }
         }
@@ -279,8 +295,8 @@ impl Answer for Hit {
 /// # Safety
 /// The CPU supports `K`'s instructions; `leaf` is a leaf of `tree`.
 #[inline(always)]
-unsafe fn leaf_closest<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
-    tree: &Tree<W, B>,
+unsafe fn leaf_closest<K: Ops, C: Counters, Prim: WidePrimitive, const W: usize, const B: usize, const P: usize>(
+    tree: &Tree<W, B, Prim>,
     leaf: ChildRef,
     active: u64,
     packet: &mut Packet<P>,
@@ -297,7 +313,7 @@ unsafe fn leaf_closest<K: Ops, C: Counters, const W: usize, const B: usize, cons
             // SAFETY: forwarded from the caller.
             if let Some((t, lane)) = unsafe { K::closest(block, &packet.lanes[i], packet.t_max[i]) } {
                 packet.t_max[i] = t;
-                packet.best[i] = block.ids[lane];
+                packet.best[i] = block.ids()[lane];
                 nearer = true;
             }
         }
@@ -310,8 +326,8 @@ unsafe fn leaf_closest<K: Ops, C: Counters, const W: usize, const B: usize, cons
 /// # Safety
 /// The CPU supports `K`'s instructions; `leaf` is a leaf of `tree`.
 #[inline(always)]
-unsafe fn leaf_any<K: Ops, C: Counters, const W: usize, const B: usize, const P: usize>(
-    tree: &Tree<W, B>,
+unsafe fn leaf_any<K: Ops, C: Counters, Prim: WidePrimitive, const W: usize, const B: usize, const P: usize>(
+    tree: &Tree<W, B, Prim>,
     leaf: ChildRef,
     active: u64,
     mut unoccluded: u64,
@@ -336,8 +352,16 @@ unsafe fn leaf_any<K: Ops, C: Counters, const W: usize, const B: usize, const P:
 /// Occlusion: a ray is dropped from the packet at its first hit, and the traversal ends when none is left.
 impl Answer for bool {
     #[inline(always)]
-    unsafe fn traverse<K: Ops, C: Counters, E: Enter<P>, const W: usize, const B: usize, const P: usize>(
-        tree: &Tree<W, B>,
+    unsafe fn traverse<
+        K: Ops,
+        C: Counters,
+        E: Enter<P>,
+        Prim: WidePrimitive,
+        const W: usize,
+        const B: usize,
+        const P: usize,
+    >(
+        tree: &Tree<W, B, Prim>,
         packet: &mut Packet<P>,
         enter: E,
         out: &mut [bool],
@@ -357,7 +381,8 @@ impl Answer for bool {
                 continue;
             }
             // SAFETY: forwarded from the caller.
-            unoccluded = unsafe { leaf_any::<K, C, W, B, P>(tree, e.child, active, unoccluded, packet, counters) };
+            unoccluded =
+                unsafe { leaf_any::<K, C, Prim, W, B, P>(tree, e.child, active, unoccluded, packet, counters) };
             if unoccluded == 0 {
                 break;
             }
@@ -382,14 +407,17 @@ pub struct Packets<'a, C, A, const P: usize> {
 impl<C: Counters, A: Answer, const P: usize> Query for Packets<'_, C, A, P> {
     type Out = ();
     #[inline(always)]
-    unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) {
+    unsafe fn run<K: Ops, O: Order, Prim: WidePrimitive, const W: usize, const B: usize>(
+        self,
+        tree: &Tree<W, B, Prim>,
+    ) {
         const { assert!(P <= 64, "the active mask is a u64") };
         let mut packet = Packet::empty();
         for (rays, out) in self.rays.chunks(P).zip(self.out.chunks_mut(P)) {
             (0..rays.len()).for_each(|_| self.counters.ray());
             packet.load(rays);
             // SAFETY: forwarded from the caller.
-            unsafe { A::traverse::<K, C, _, W, B, P>(tree, &mut packet, Masked, out, self.counters) };
+            unsafe { A::traverse::<K, C, _, Prim, W, B, P>(tree, &mut packet, Masked, out, self.counters) };
         }
     }
 }

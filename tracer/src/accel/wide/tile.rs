@@ -27,6 +27,7 @@
 
 use super::collapse::Tree;
 use super::kernel::{Ops, Query};
+use super::leaf::WidePrimitive;
 use super::order::Order;
 use super::packet::{Answer, CULL_SLACK, Enter, Entry, Masked, Packet, Visit, bits};
 use super::ray::FrustumLanes;
@@ -152,14 +153,17 @@ struct OnePacket<'a, C, A, const RANGED: bool> {
 impl<C: Counters, A: Answer, const RANGED: bool> Query for OnePacket<'_, C, A, RANGED> {
     type Out = ();
     #[inline(always)]
-    unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) {
+    unsafe fn run<K: Ops, O: Order, Prim: WidePrimitive, const W: usize, const B: usize>(
+        self,
+        tree: &Tree<W, B, Prim>,
+    ) {
         let (packet, out, counters) = (self.packet, self.out, self.counters);
         // SAFETY (both): forwarded from the caller.
         if RANGED {
             let ranged = Ranged::new(self.frustum, &packet.t_max);
-            unsafe { A::traverse::<K, C, _, W, B, TILE_RAYS>(tree, packet, ranged, out, counters) }
+            unsafe { A::traverse::<K, C, _, Prim, W, B, TILE_RAYS>(tree, packet, ranged, out, counters) }
         } else {
-            unsafe { A::traverse::<K, C, _, W, B, TILE_RAYS>(tree, packet, Masked, out, counters) }
+            unsafe { A::traverse::<K, C, _, Prim, W, B, TILE_RAYS>(tree, packet, Masked, out, counters) }
         }
     }
 }
@@ -167,7 +171,10 @@ impl<C: Counters, A: Answer, const RANGED: bool> Query for OnePacket<'_, C, A, R
 impl<C: Counters, A: Answer> Query for Tiles<'_, C, A> {
     type Out = ();
     #[inline(always)]
-    unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) {
+    unsafe fn run<K: Ops, O: Order, Prim: WidePrimitive, const W: usize, const B: usize>(
+        self,
+        tree: &Tree<W, B, Prim>,
+    ) {
         let packet = &mut Packet::empty();
         for (rays, out) in self.rays.chunks(TILE_RAYS).zip(self.out.chunks_mut(TILE_RAYS)) {
             (0..rays.len()).for_each(|_| self.counters.ray());
@@ -176,9 +183,13 @@ impl<C: Counters, A: Answer> Query for Tiles<'_, C, A> {
             let counters = &mut *self.counters;
             // SAFETY (both): forwarded from the caller.
             if frustum.is_one_octant() {
-                unsafe { K::run_apart::<_, O, W, B>(OnePacket::<C, A, true> { packet, frustum, out, counters }, tree) }
+                unsafe {
+                    K::run_apart::<_, O, Prim, W, B>(OnePacket::<C, A, true> { packet, frustum, out, counters }, tree)
+                }
             } else {
-                unsafe { K::run_apart::<_, O, W, B>(OnePacket::<C, A, false> { packet, frustum, out, counters }, tree) }
+                unsafe {
+                    K::run_apart::<_, O, Prim, W, B>(OnePacket::<C, A, false> { packet, frustum, out, counters }, tree)
+                }
             }
         }
     }

@@ -13,7 +13,7 @@ use std::mem::MaybeUninit;
 
 use super::collapse::Tree;
 use super::kernel::{Ops, Query};
-use super::leaf::PAD;
+use super::leaf::{LeafBlock, PAD, WidePrimitive};
 use super::node::ChildRef;
 use super::order::{Entry, Order};
 use super::ray::RayLanes;
@@ -91,8 +91,8 @@ impl Stack {
 
 /// Where the traversal goes next: into `ChildRef`, or back to the stack.
 #[inline(always)]
-unsafe fn enter<K: Ops, O: Order, C: Counters, const W: usize, const B: usize>(
-    tree: &Tree<W, B>,
+unsafe fn enter<K: Ops, O: Order, C: Counters, Prim: WidePrimitive, const W: usize, const B: usize>(
+    tree: &Tree<W, B, Prim>,
     node: ChildRef,
     r: &RayLanes,
     t_max: f32,
@@ -135,8 +135,8 @@ fn next(stack: &mut Stack, t_max: f32) -> Option<ChildRef> {
 /// # Safety
 /// The CPU supports `K`'s instructions.
 #[inline(always)]
-pub unsafe fn closest<K: Ops, O: Order, C: Counters, const W: usize, const B: usize>(
-    tree: &Tree<W, B>,
+pub unsafe fn closest<K: Ops, O: Order, C: Counters, Prim: WidePrimitive, const W: usize, const B: usize>(
+    tree: &Tree<W, B, Prim>,
     ray: &Ray,
     counters: &mut C,
 ) -> Option<Hit> {
@@ -148,7 +148,7 @@ pub unsafe fn closest<K: Ops, O: Order, C: Counters, const W: usize, const B: us
     while let Some(child) = at {
         if child.is_node() {
             // SAFETY: forwarded from the caller.
-            at = unsafe { enter::<K, O, C, W, B>(tree, child, &r, t_max, &mut stack, counters) };
+            at = unsafe { enter::<K, O, C, Prim, W, B>(tree, child, &r, t_max, &mut stack, counters) };
             if at.is_some() {
                 continue;
             }
@@ -162,7 +162,7 @@ pub unsafe fn closest<K: Ops, O: Order, C: Counters, const W: usize, const B: us
                 // SAFETY: forwarded from the caller.
                 if let Some((t, lane)) = unsafe { K::closest(block, &r, t_max) } {
                     t_max = t;
-                    best = block.ids[lane];
+                    best = block.ids()[lane];
                 }
             }
         }
@@ -176,8 +176,8 @@ pub unsafe fn closest<K: Ops, O: Order, C: Counters, const W: usize, const B: us
 /// # Safety
 /// The CPU supports `K`'s instructions.
 #[inline(always)]
-pub unsafe fn any<K: Ops, O: Order, C: Counters, const W: usize, const B: usize>(
-    tree: &Tree<W, B>,
+pub unsafe fn any<K: Ops, O: Order, C: Counters, Prim: WidePrimitive, const W: usize, const B: usize>(
+    tree: &Tree<W, B, Prim>,
     ray: &Ray,
     counters: &mut C,
 ) -> bool {
@@ -187,7 +187,7 @@ pub unsafe fn any<K: Ops, O: Order, C: Counters, const W: usize, const B: usize>
     while let Some(child) = at {
         if child.is_node() {
             // SAFETY: forwarded from the caller.
-            at = unsafe { enter::<K, O, C, W, B>(tree, child, &r, ray.t_max, &mut stack, counters) };
+            at = unsafe { enter::<K, O, C, Prim, W, B>(tree, child, &r, ray.t_max, &mut stack, counters) };
             if at.is_some() {
                 continue;
             }
@@ -247,29 +247,38 @@ pub struct AnyBatch<'a, C> {
 impl<C: Counters> Query for Closest<'_, C> {
     type Out = Option<Hit>;
     #[inline(always)]
-    unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) -> Option<Hit> {
+    unsafe fn run<K: Ops, O: Order, Prim: WidePrimitive, const W: usize, const B: usize>(
+        self,
+        tree: &Tree<W, B, Prim>,
+    ) -> Option<Hit> {
         // SAFETY: forwarded from the caller.
-        unsafe { closest::<K, O, C, W, B>(tree, self.ray, self.counters) }
+        unsafe { closest::<K, O, C, Prim, W, B>(tree, self.ray, self.counters) }
     }
 }
 
 impl<C: Counters> Query for Any<'_, C> {
     type Out = bool;
     #[inline(always)]
-    unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) -> bool {
+    unsafe fn run<K: Ops, O: Order, Prim: WidePrimitive, const W: usize, const B: usize>(
+        self,
+        tree: &Tree<W, B, Prim>,
+    ) -> bool {
         // SAFETY: forwarded from the caller.
-        unsafe { any::<K, O, C, W, B>(tree, self.ray, self.counters) }
+        unsafe { any::<K, O, C, Prim, W, B>(tree, self.ray, self.counters) }
     }
 }
 
 impl<C: Counters> Query for ClosestBatch<'_, C> {
     type Out = ();
     #[inline(always)]
-    unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) {
+    unsafe fn run<K: Ops, O: Order, Prim: WidePrimitive, const W: usize, const B: usize>(
+        self,
+        tree: &Tree<W, B, Prim>,
+    ) {
         for (ray, out) in self.rays.iter().zip(self.out) {
             self.counters.ray();
             // SAFETY: forwarded from the caller.
-            *out = unsafe { closest::<K, O, C, W, B>(tree, ray, self.counters) }.unwrap_or(PrimaryHits::MISS);
+            *out = unsafe { closest::<K, O, C, Prim, W, B>(tree, ray, self.counters) }.unwrap_or(PrimaryHits::MISS);
         }
     }
 }
@@ -277,11 +286,14 @@ impl<C: Counters> Query for ClosestBatch<'_, C> {
 impl<C: Counters> Query for AnyBatch<'_, C> {
     type Out = ();
     #[inline(always)]
-    unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) {
+    unsafe fn run<K: Ops, O: Order, Prim: WidePrimitive, const W: usize, const B: usize>(
+        self,
+        tree: &Tree<W, B, Prim>,
+    ) {
         for (ray, out) in self.rays.iter().zip(self.out) {
             self.counters.ray();
             // SAFETY: forwarded from the caller.
-            *out = unsafe { any::<K, O, C, W, B>(tree, ray, self.counters) };
+            *out = unsafe { any::<K, O, C, Prim, W, B>(tree, ray, self.counters) };
         }
     }
 }

@@ -12,7 +12,7 @@
 use glam::Vec3A;
 use rayon::prelude::*;
 
-use super::{Box3A, Decision, NodeBounds, NodeView, PrimRef, partition, proper};
+use super::{Box3A, BuildRef, Decision, NodeBounds, NodeView, partition, proper};
 use crate::accel::bvh::sah::CostModel;
 
 /// One bin: the union of its primitives' boxes and their number.
@@ -72,7 +72,7 @@ fn bin_index(c: Vec3A, min: Vec3A, scale: Vec3A, last: Vec3A) -> [usize; 3] {
 
 /// Bins every primitive on the three axes in one pass; axes of zero `scale` put everything in their first bin.
 #[inline]
-fn bin_all(bins: &mut [Bin], bin_count: usize, refs: &[PrimRef], min: Vec3A, scale: Vec3A) {
+fn bin_all<R: BuildRef>(bins: &mut [Bin], bin_count: usize, refs: &[R], min: Vec3A, scale: Vec3A) {
     let (bx, rest) = bins.split_at_mut(bin_count);
     let (by, bz) = rest.split_at_mut(bin_count);
     let last = Vec3A::splat((bin_count - 1) as f32);
@@ -85,7 +85,7 @@ fn bin_all(bins: &mut [Bin], bin_count: usize, refs: &[PrimRef], min: Vec3A, sca
 }
 
 /// [`bin_all`] over chunks of `refs` in parallel, the chunks' bins merged into `bins`.
-fn bin_all_parallel(bins: &mut [Bin], bin_count: usize, refs: &[PrimRef], min: Vec3A, scale: Vec3A) {
+fn bin_all_parallel<R: BuildRef>(bins: &mut [Bin], bin_count: usize, refs: &[R], min: Vec3A, scale: Vec3A) {
     let merged = refs
         .par_chunks(BIN_CHUNK)
         .fold(
@@ -167,10 +167,10 @@ fn best_plane(
 /// Chooses the cheapest plane among `bin_count - 1` per axis, or a leaf when that is cheaper and allowed.
 ///
 /// On a split, also returns the two children's bounds.
-pub fn split(
+pub fn split<R: BuildRef>(
     node: &NodeView<'_>,
     prims: &mut [u32],
-    refs: &mut [PrimRef],
+    refs: &mut [R],
     bin_count: usize,
     costs: CostModel,
     scratch: &mut Bins,

@@ -1,9 +1,9 @@
 //! The paper's split: the plane through the middle of the centroid bounds' longest axis.
 
-use super::{Decision, NodeView, PrimRef, partition, proper};
+use super::{BuildRef, Decision, NodeView, partition, proper};
 
 /// Splits at the midpoint of the longest centroid axis; nodes that may be leaves become leaves.
-pub fn split(node: &NodeView<'_>, prims: &mut [u32], refs: &mut [PrimRef]) -> Decision {
+pub fn split<R: BuildRef>(node: &NodeView<'_>, prims: &mut [u32], refs: &mut [R]) -> Decision {
     if node.may_be_leaf {
         return Decision::Leaf;
     }

@@ -9,7 +9,7 @@ pub mod sweep_sah;
 use glam::Vec3;
 
 use crate::geometry::Aabb;
-pub use prim_ref::{Box3A, PrimRef};
+pub use prim_ref::{Box3A, BoxRef, BuildRef, PrimRef, Referenced};
 
 /// What a split rule decided for a node.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -52,7 +52,7 @@ impl NodeBounds {
 
     /// The bounds of `refs`.
     #[inline]
-    pub fn of(refs: &[PrimRef]) -> Self {
+    pub fn of<R: BuildRef>(refs: &[R]) -> Self {
         let (mut bounds, mut centroids) = (Box3A::EMPTY, Box3A::EMPTY);
         for r in refs {
             bounds.add(&r.bounds());
@@ -70,7 +70,7 @@ impl NodeBounds {
 /// Moves the primitives (ids and their [`PrimRef`]s alike) for which `left` holds to the front; returns how many
 /// there are. The order is that of swapping each match with the first non-match before it.
 #[inline]
-pub fn partition(prims: &mut [u32], refs: &mut [PrimRef], mut left: impl FnMut(&PrimRef) -> bool) -> usize {
+pub fn partition<R: BuildRef>(prims: &mut [u32], refs: &mut [R], mut left: impl FnMut(&R) -> bool) -> usize {
     assert_eq!(prims.len(), refs.len());
     let mut mid = 0;
     for i in 0..prims.len() {

@@ -1,4 +1,7 @@
-//! A primitive's sphere in one SIMD register, kept in the node's primitive order so that split loops read it in
+//! What the builder keeps of each primitive, in the node's primitive order ([`BuildRef`]): for a sphere, the sphere
+//! in one SIMD register ([`PrimRef`]); for a triangle, its box ([`BoxRef`]).
+//!
+//! A sphere's reference is its sphere in one SIMD register, kept in the node's primitive order so that split loops read it in
 //! sequence: 16 bytes a primitive, where a stored box and centroid took 48. Its box is computed when read, by the
 //! operations of [`Sphere::bounds`], so it has the same bits.
 //!
@@ -7,7 +10,76 @@
 
 use glam::{Vec3A, Vec3Swizzles, Vec4};
 
-use crate::geometry::{Aabb, Sphere};
+use crate::geometry::{Aabb, MollerTrumboreTriangle, Primitive, Sphere, WatertightTriangle};
+
+/// What split rules read of a primitive, kept beside its id in the node's primitive order.
+pub trait BuildRef: Copy + Send + Sync + std::fmt::Debug {
+    /// The primitive's centroid ([`Primitive::centroid`], bit for bit).
+    fn centroid(&self) -> Vec3A;
+    /// The primitive's box ([`Primitive::bounds`], bit for bit).
+    fn bounds(&self) -> Box3A;
+}
+
+/// A primitive the shared builder builds over: how it is referenced while splitting.
+pub trait Referenced: Primitive {
+    /// Its reference.
+    type Ref: BuildRef;
+    /// The reference of `self`.
+    fn reference(&self) -> Self::Ref;
+    /// The primitive of reference `r`, whose id is `id` in `all`.
+    fn from_ref(r: &Self::Ref, all: &[Self], id: u32) -> Self;
+}
+
+impl Referenced for Sphere {
+    type Ref = PrimRef;
+
+    #[inline(always)]
+    fn reference(&self) -> PrimRef {
+        PrimRef::new(self)
+    }
+
+    #[inline(always)]
+    fn from_ref(r: &PrimRef, _all: &[Self], _id: u32) -> Self {
+        r.sphere()
+    }
+}
+
+/// A primitive's box in two SIMD registers; its centroid is the box's center.
+#[derive(Clone, Copy, Debug)]
+pub struct BoxRef(Box3A);
+
+impl BuildRef for BoxRef {
+    #[inline(always)]
+    fn centroid(&self) -> Vec3A {
+        (self.0.min + self.0.max) * 0.5
+    }
+
+    #[inline(always)]
+    fn bounds(&self) -> Box3A {
+        self.0
+    }
+}
+
+macro_rules! boxed_reference {
+    ($($t:ty),*) => {$(
+        impl Referenced for $t {
+            type Ref = BoxRef;
+
+            #[inline(always)]
+            fn reference(&self) -> BoxRef {
+                let b = Primitive::bounds(self);
+                BoxRef(Box3A { min: b.min.into(), max: b.max.into() })
+            }
+
+            #[inline(always)]
+            fn from_ref(_r: &BoxRef, all: &[Self], id: u32) -> Self {
+                all[id as usize]
+            }
+        }
+    )*};
+}
+
+boxed_reference!(MollerTrumboreTriangle, WatertightTriangle);
 
 /// The sphere of the primitive at the same position of the node's primitive ids: center in x, y, z, radius in w.
 #[derive(Clone, Copy, Debug)]
@@ -20,24 +92,26 @@ impl PrimRef {
         PrimRef(s.center.extend(s.radius))
     }
 
+    /// The primitive's sphere.
+    #[inline(always)]
+    pub fn sphere(&self) -> Sphere {
+        Sphere::new(self.0.truncate(), self.0.w)
+    }
+}
+
+impl BuildRef for PrimRef {
     /// The primitive's centroid (its sphere's center).
     #[inline(always)]
-    pub fn centroid(&self) -> Vec3A {
+    fn centroid(&self) -> Vec3A {
         Vec3A::from_vec4(self.0)
     }
 
     /// The primitive's box: [`Sphere::bounds`], bit for bit.
     #[inline(always)]
-    pub fn bounds(&self) -> Box3A {
+    fn bounds(&self) -> Box3A {
         let (c, r) = (self.centroid(), Vec3A::splat(self.0.w));
         let pad = (c.abs() + r) * Sphere::BOUNDS_PAD;
         Box3A { min: c - r - pad, max: c + r + pad }
-    }
-
-    /// The primitive's sphere.
-    #[inline(always)]
-    pub fn sphere(&self) -> Sphere {
-        Sphere::new(self.0.truncate(), self.0.w)
     }
 }
 
@@ -92,10 +166,10 @@ impl Box3A {
     }
 }
 
-/// Rewrites `refs` from `spheres` (indexed by id) after a split rule reordered `prims` alone.
-pub fn gather(refs: &mut [PrimRef], prims: &[u32], spheres: &[Sphere]) {
+/// Rewrites `refs` from `all` (indexed by id) after a split rule reordered `prims` alone.
+pub fn gather<P: Referenced>(refs: &mut [P::Ref], prims: &[u32], all: &[P]) {
     for (r, &p) in refs.iter_mut().zip(prims) {
-        *r = PrimRef::new(&spheres[p as usize]);
+        *r = all[p as usize].reference();
     }
 }
 
@@ -116,6 +190,20 @@ mod tests {
             let r = PrimRef::new(&s);
             assert_eq!(r.bounds().aabb(), s.bounds(), "{s:?}");
             assert_eq!((Vec3::from(r.centroid()), r.sphere()), (s.center, s));
+        }
+    }
+
+    #[test]
+    fn triangle_references_are_the_triangles_bounds_and_centroids_bit_for_bit() {
+        let mut rng = SplitMix64::new(8);
+        let mut f = |scale: f64| ((rng.next_f64() - 0.5) * scale) as f32;
+        for i in 0..10_000 {
+            let scale = [1.0, 1e3, 1e7, 1e-3][i % 4];
+            let mut p = || Vec3::new(f(scale), f(scale), f(scale));
+            let t = WatertightTriangle(crate::geometry::Triangle::new(p(), p(), p()));
+            let r = t.reference();
+            assert_eq!(r.bounds().aabb(), Primitive::bounds(&t), "{t:?}");
+            assert_eq!(Vec3::from(r.centroid()), Primitive::centroid(&t), "{t:?}");
         }
     }
 }

@@ -15,13 +15,13 @@ pub mod avx2;
 #[cfg(target_arch = "x86_64")]
 pub mod avx512;
 #[cfg(target_arch = "x86_64")]
-mod lanes;
+pub mod lanes;
 pub mod scalar;
 #[cfg(target_arch = "x86_64")]
 pub mod simd;
 
 use super::collapse::Tree;
-use super::leaf::Block;
+use super::leaf::{LeafBlock, WidePrimitive};
 use super::node::WideNode;
 use super::order::Order;
 use super::ray::{FrustumLanes, RayLanes};
@@ -49,24 +49,27 @@ pub trait Ops {
         dist: &mut [f32; W],
     ) -> u32;
 
-    /// The nearest hit in `(t_min, t_max)` among the block's spheres: its distance and lowest lane, if any.
+    /// The nearest hit in `(t_min, t_max)` among the block's primitives: its distance and lowest lane, if any.
     ///
     /// # Safety
     /// The CPU supports the kernel's instructions.
-    unsafe fn closest<const B: usize>(block: &Block<B>, ray: &RayLanes, t_max: f32) -> Option<(f32, usize)>;
+    unsafe fn closest<L: LeafBlock<B>, const B: usize>(block: &L, ray: &RayLanes, t_max: f32) -> Option<(f32, usize)>;
 
-    /// True when any of the block's spheres is hit in `(t_min, t_max)`.
+    /// True when any of the block's primitives is hit in `(t_min, t_max)`.
     ///
     /// # Safety
     /// The CPU supports the kernel's instructions.
-    unsafe fn any<const B: usize>(block: &Block<B>, ray: &RayLanes, t_max: f32) -> bool;
+    unsafe fn any<L: LeafBlock<B>, const B: usize>(block: &L, ray: &RayLanes, t_max: f32) -> bool;
 
     /// Runs `query` in the kernel's entry function (compiled for the kernel, never inlined into the caller): for a
     /// query that picks one of several traversals per packet, so that each is compiled on its own.
     ///
     /// # Safety
     /// The CPU supports the kernel's instructions.
-    unsafe fn run_apart<Q: Query, O: Order, const W: usize, const B: usize>(query: Q, tree: &Tree<W, B>) -> Q::Out;
+    unsafe fn run_apart<Q: Query, O: Order, P: WidePrimitive, const W: usize, const B: usize>(
+        query: Q,
+        tree: &Tree<W, B, P>,
+    ) -> Q::Out;
 }
 
 /// Work run against a tree with a kernel and child order chosen at compile time (a ray, or a batch of rays).
@@ -78,5 +81,8 @@ pub trait Query {
     ///
     /// # Safety
     /// The CPU supports `K`'s instructions.
-    unsafe fn run<K: Ops, O: Order, const W: usize, const B: usize>(self, tree: &Tree<W, B>) -> Self::Out;
+    unsafe fn run<K: Ops, O: Order, P: WidePrimitive, const W: usize, const B: usize>(
+        self,
+        tree: &Tree<W, B, P>,
+    ) -> Self::Out;
 }

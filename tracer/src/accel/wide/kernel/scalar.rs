@@ -1,10 +1,8 @@
 //! The portable kernel: one lane at a time, the same arithmetic as the binary trees' box and sphere tests.
 
-use glam::Vec3;
-
 use super::{Ops, Query};
 use crate::accel::wide::collapse::Tree;
-use crate::accel::wide::leaf::Block;
+use crate::accel::wide::leaf::{LeafBlock, WidePrimitive};
 use crate::accel::wide::node::WideNode;
 use crate::accel::wide::order::Order;
 use crate::accel::wide::ray::{FrustumLanes, RayLanes};
@@ -15,9 +13,12 @@ pub struct Scalar;
 
 /// Runs `query` with the portable kernel.
 #[inline(never)]
-pub fn run<Q: Query, O: Order, const W: usize, const B: usize>(query: Q, tree: &Tree<W, B>) -> Q::Out {
+pub fn run<Q: Query, O: Order, P: WidePrimitive, const W: usize, const B: usize>(
+    query: Q,
+    tree: &Tree<W, B, P>,
+) -> Q::Out {
     // SAFETY: the scalar kernel uses no optional instructions.
-    unsafe { query.run::<Scalar, O, W, B>(tree) }
+    unsafe { query.run::<Scalar, O, P, W, B>(tree) }
 }
 
 /// Entry distance into child `lane` of `node` before `t_max`, or `None` when missed: [`RayBoxTester::entry`]
@@ -56,38 +57,13 @@ fn frustum_entry<const W: usize>(node: &WideNode<W>, f: &FrustumLanes, t_max: f3
     (occupied && near <= far * RayBoxTester::FAR_SCALE && near <= t_max).then_some(near)
 }
 
-/// Nearest root of lane `lane`'s sphere in `(t_min, t_max)`, or infinity: [`crate::geometry::Sphere::intersect`]
-/// with the squared radius stored. Padding lanes (NaN) never hit.
-#[inline(always)]
-pub(crate) fn sphere<const B: usize>(block: &Block<B>, r: &RayLanes, t_max: f32, lane: usize) -> f32 {
-    let c = Vec3::new(block.cx[lane], block.cy[lane], block.cz[lane]);
-    let r2 = block.r2[lane];
-    let d = Vec3::from_array(r.dir);
-    let f = Vec3::from_array(r.origin) - c;
-    let a = r.a;
-    let b = f.dot(d);
-    let offset = f - d * (b / a);
-    let disc = a * (r2 - offset.dot(offset));
-    if disc < 0.0 {
-        return f32::INFINITY;
-    }
-    let c = f.dot(f) - r2;
-    let q = -(b + disc.sqrt().copysign(b));
-    let (r0, r1) = (c / q, q / a);
-    let (near, far) = if r0 <= r1 { (r0, r1) } else { (r1, r0) };
-    if near > r.t_min && near < t_max {
-        near
-    } else if far > r.t_min && far < t_max {
-        far
-    } else {
-        f32::INFINITY
-    }
-}
-
 impl Ops for Scalar {
     #[inline(always)]
-    unsafe fn run_apart<Q: Query, O: Order, const W: usize, const B: usize>(query: Q, tree: &Tree<W, B>) -> Q::Out {
-        run::<Q, O, W, B>(query, tree)
+    unsafe fn run_apart<Q: Query, O: Order, P: WidePrimitive, const W: usize, const B: usize>(
+        query: Q,
+        tree: &Tree<W, B, P>,
+    ) -> Q::Out {
+        run::<Q, O, P, W, B>(query, tree)
     }
 
     #[inline(always)]
@@ -120,10 +96,10 @@ impl Ops for Scalar {
     }
 
     #[inline(always)]
-    unsafe fn closest<const B: usize>(block: &Block<B>, r: &RayLanes, t_max: f32) -> Option<(f32, usize)> {
+    unsafe fn closest<L: LeafBlock<B>, const B: usize>(block: &L, r: &RayLanes, t_max: f32) -> Option<(f32, usize)> {
         let mut best: Option<(f32, usize)> = None;
         for lane in 0..B {
-            let t = sphere(block, r, t_max, lane);
+            let t = block.lane(r, t_max, lane);
             if t < best.map_or(t_max, |b| b.0) {
                 best = Some((t, lane));
             }
@@ -132,7 +108,7 @@ impl Ops for Scalar {
     }
 
     #[inline(always)]
-    unsafe fn any<const B: usize>(block: &Block<B>, r: &RayLanes, t_max: f32) -> bool {
-        (0..B).any(|lane| sphere(block, r, t_max, lane) < t_max)
+    unsafe fn any<L: LeafBlock<B>, const B: usize>(block: &L, r: &RayLanes, t_max: f32) -> bool {
+        (0..B).any(|lane| block.lane(r, t_max, lane) < t_max)
     }
 }

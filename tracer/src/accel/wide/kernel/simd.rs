@@ -1,12 +1,12 @@
-//! The SIMD kernels' [`Ops`], written once over [`lanes`]: 128-bit vectors for 4-wide nodes and 4-sphere blocks,
-//! `__m256` for 8-wide ones, and the kernel's own vector ([`Simd::Block16`]) for 16-sphere blocks.
+//! The SIMD kernels' [`Ops`], written once over [`lanes`]: 128-bit vectors for 4-wide nodes and 4-lane blocks,
+//! `__m256` for 8-wide ones, and the kernel's own vector ([`Simd::Block16`]) for 16-lane blocks.
 
 use std::arch::x86_64::{__m128, __m256};
 
 use super::lanes::{self, Vf};
 use super::{Ops, Query};
 use crate::accel::wide::collapse::Tree;
-use crate::accel::wide::leaf::Block;
+use crate::accel::wide::leaf::{LeafBlock, WidePrimitive};
 use crate::accel::wide::node::WideNode;
 use crate::accel::wide::order::Order;
 use crate::accel::wide::ray::{FrustumLanes, RayLanes};
@@ -21,14 +21,20 @@ pub trait Simd {
     ///
     /// # Safety
     /// The CPU supports the kernel's instructions.
-    unsafe fn run<Q: Query, O: Order, const W: usize, const B: usize>(query: Q, tree: &Tree<W, B>) -> Q::Out;
+    unsafe fn run<Q: Query, O: Order, P: WidePrimitive, const W: usize, const B: usize>(
+        query: Q,
+        tree: &Tree<W, B, P>,
+    ) -> Q::Out;
 }
 
 impl<S: Simd> Ops for S {
     #[inline(always)]
-    unsafe fn run_apart<Q: Query, O: Order, const W: usize, const B: usize>(query: Q, tree: &Tree<W, B>) -> Q::Out {
+    unsafe fn run_apart<Q: Query, O: Order, P: WidePrimitive, const W: usize, const B: usize>(
+        query: Q,
+        tree: &Tree<W, B, P>,
+    ) -> Q::Out {
         // SAFETY: forwarded from the caller.
-        unsafe { S::run::<Q, O, W, B>(query, tree) }
+        unsafe { S::run::<Q, O, P, W, B>(query, tree) }
     }
 
     #[inline(always)]
@@ -59,23 +65,23 @@ impl<S: Simd> Ops for S {
     }
 
     #[inline(always)]
-    unsafe fn closest<const B: usize>(block: &Block<B>, r: &RayLanes, t_max: f32) -> Option<(f32, usize)> {
+    unsafe fn closest<L: LeafBlock<B>, const B: usize>(block: &L, r: &RayLanes, t_max: f32) -> Option<(f32, usize)> {
         unsafe {
             match B {
-                4 => lanes::closest::<__m128, B>(block, r, t_max),
-                8 => lanes::closest::<__m256, B>(block, r, t_max),
-                _ => lanes::closest::<S::Block16, B>(block, r, t_max),
+                4 => lanes::closest::<__m128, L, B>(block, r, t_max),
+                8 => lanes::closest::<__m256, L, B>(block, r, t_max),
+                _ => lanes::closest::<S::Block16, L, B>(block, r, t_max),
             }
         }
     }
 
     #[inline(always)]
-    unsafe fn any<const B: usize>(block: &Block<B>, r: &RayLanes, t_max: f32) -> bool {
+    unsafe fn any<L: LeafBlock<B>, const B: usize>(block: &L, r: &RayLanes, t_max: f32) -> bool {
         unsafe {
             match B {
-                4 => lanes::any::<__m128, B>(block, r, t_max),
-                8 => lanes::any::<__m256, B>(block, r, t_max),
-                _ => lanes::any::<S::Block16, B>(block, r, t_max),
+                4 => lanes::any::<__m128, L, B>(block, r, t_max),
+                8 => lanes::any::<__m256, L, B>(block, r, t_max),
+                _ => lanes::any::<S::Block16, L, B>(block, r, t_max),
             }
         }
     }
