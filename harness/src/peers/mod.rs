@@ -1,8 +1,10 @@
 //! Peer backends: other people's ray-tracing BVHs behind the tracer's [`tracer::accel::Accelerator`] trait,
 //! so every renderer and kernel runs on them unchanged.
 //!
-//! - [`obvhs`]: obvhs 0.4's BVH2 and compressed wide BVH8, with our ray-sphere test in the leaves;
-//! - [`embree`]: Embree 4 (sphere points), loaded at run time; single rays and 16-wide packets.
+//! - [`obvhs`]: obvhs 0.4's BVH2 and compressed wide BVH8, over spheres (our ray-sphere test in the leaves) or
+//!   over triangle meshes (obvhs's own triangle builder and ray-triangle test);
+//! - [`embree`]: Embree 4, loaded at run time, over sphere points or triangle meshes (its native triangles);
+//!   single rays and 8- and 16-wide packets.
 //!
 //! Peers cannot report node, box or primitive counts (obvhs leaves count primitive tests; Embree counts nothing).
 
@@ -14,8 +16,8 @@ mod testing;
 
 use serde::{Deserialize, Serialize};
 
-pub use self::embree::{EmbreeConfig, EmbreeDevice, EmbreeLibrary, EmbreeSpheres, EmbreeUnavailable};
-pub use self::obvhs::{ObvhsBvh2, ObvhsCwbvh};
+pub use self::embree::{EmbreeConfig, EmbreeDevice, EmbreeLibrary, EmbreeSpheres, EmbreeTriangles, EmbreeUnavailable};
+pub use self::obvhs::{ObvhsBvh2, ObvhsCwbvh, ObvhsLeaf, RtTriangle};
 pub use schema::PeerKind;
 
 /// Where the Embree library was found and its version, for `harness list`.

@@ -1,8 +1,16 @@
-//! obvhs 0.4 as a peer: its BVH2 and compressed wide BVH8 (CWBVH) built over our spheres' boxes.
+//! obvhs 0.4 as a peer: its BVH2 and compressed wide BVH8 (CWBVH), over our spheres or over a triangle mesh.
 //!
-//! obvhs builds from boxes only ([`Sphere::bounds`]); leaves call our own [`Sphere::intersect`], so hit
-//! distances are bit-identical to the tracer's. Spheres are stored in obvhs's primitive order, so leaves read
-//! them directly; `primitive_indices` maps a hit back to the scene's sphere index.
+//! Both trees are generic over the primitive their leaves test ([`ObvhsLeaf`]):
+//! - [`Sphere`] (the default; `build`): obvhs builds from the spheres' boxes ([`Sphere::bounds`]) and the leaves
+//!   call our own [`Sphere::intersect`], so hit distances are bit-identical to the tracer's;
+//! - [`RtTriangle`] (`build_mesh`, e.g. `ObvhsBvh2<RtTriangle>`): obvhs's own triangle path, built by
+//!   `build_*_from_tris` (which splits large triangles' boxes under the slow presets) and tested by obvhs's own
+//!   ray-triangle test (`RtTriangle::intersect`, a Möller–Trumbore variant over precomputed edges and normal).
+//!   obvhs's node boxes are not padded, so its traversal may cull a hit its triangle test reports right on an
+//!   edge or vertex: an edge tie, which brute force tolerates.
+//!
+//! Primitives are stored in obvhs's primitive order, so leaves read them directly; `primitive_indices` maps a
+//! hit back to the scene's sphere or triangle index.
 
 use std::time::Duration;
 
@@ -13,12 +21,38 @@ use obvhs::bvh2::node::Bvh2Node;
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::ray::{Ray as ObvhsRay, RayHit};
+pub use obvhs::rt_triangle::RtTriangle;
+use obvhs::triangle::Triangle as ObvhsTriangle;
 use schema::ObvhsQuality;
 use tracer::Vec3;
 use tracer::accel::bvh::sah;
 use tracer::accel::{Accelerator, Hit, TreeStats};
 use tracer::counters::Counters;
 use tracer::geometry::{Ray, Sphere};
+use tracer::scene::mesh::Mesh;
+
+/// A primitive obvhs's trees hold in their leaves: the ray test the leaves run.
+pub trait ObvhsLeaf: Copy + Send + Sync {
+    /// Distance of the hit of `ray` (as obvhs passes it, `r`: its `tmax` shrinks to the nearest hit so far), or
+    /// infinity for a miss.
+    fn hit(&self, ray: &Ray, r: &ObvhsRay) -> f32;
+}
+
+impl ObvhsLeaf for Sphere {
+    /// Our own test on our ray, up to obvhs's current `tmax`.
+    #[inline(always)]
+    fn hit(&self, ray: &Ray, r: &ObvhsRay) -> f32 {
+        self.intersect(ray, r.tmax).unwrap_or(f32::INFINITY)
+    }
+}
+
+impl ObvhsLeaf for RtTriangle {
+    /// obvhs's own test on obvhs's ray (hits with `t` in `[tmin, tmax]`; the traversal keeps those below `tmax`).
+    #[inline(always)]
+    fn hit(&self, _ray: &Ray, r: &ObvhsRay) -> f32 {
+        self.intersect(r)
+    }
+}
 
 /// The build parameters of an obvhs preset (`BvhBuildParams::*_build()`; `pre_split` only applies to triangles).
 pub fn preset(quality: ObvhsQuality) -> BvhBuildParams {
@@ -43,9 +77,14 @@ fn boxes(spheres: &[Sphere]) -> Vec<ObvhsAabb> {
         .collect()
 }
 
-/// Spheres in obvhs's primitive order.
-fn reordered(spheres: &[Sphere], primitive_indices: &[u32]) -> Vec<Sphere> {
-    primitive_indices.iter().map(|&i| spheres[i as usize]).collect()
+/// A mesh's triangles as obvhs's triangles, in index order.
+fn obvhs_triangles(mesh: &Mesh) -> Vec<ObvhsTriangle> {
+    mesh.triangles().map(|t| ObvhsTriangle { v0: t.p[0].into(), v1: t.p[1].into(), v2: t.p[2].into() }).collect()
+}
+
+/// `source`'s primitives in obvhs's primitive order, as leaf primitives.
+fn reordered<S: Copy, P>(source: &[S], primitive_indices: &[u32], leaf: impl Fn(S) -> P) -> Vec<P> {
+    primitive_indices.iter().map(|&i| leaf(source[i as usize])).collect()
 }
 
 /// Our ray in obvhs's form (obvhs computes its own guarded reciprocal direction).
@@ -64,41 +103,54 @@ fn area(min: Vec3, max: Vec3) -> f64 {
     2.0 * (e.x as f64 * e.y as f64 + e.y as f64 * e.z as f64 + e.z as f64 * e.x as f64)
 }
 
-/// obvhs's binary BVH (PLOC build, reinsertion, leaf collapse), traversed by `Bvh2::ray_traverse`.
+/// obvhs's binary BVH (PLOC build, reinsertion, leaf collapse) over spheres or [`RtTriangle`]s, traversed by
+/// `Bvh2::ray_traverse`.
 #[derive(Clone)]
-pub struct ObvhsBvh2 {
+pub struct ObvhsBvh2<P = Sphere> {
     bvh: Bvh2,
-    /// Spheres in obvhs's primitive order.
-    spheres: Vec<Sphere>,
+    /// Primitives in obvhs's primitive order.
+    prims: Vec<P>,
 }
 
-impl std::fmt::Debug for ObvhsBvh2 {
+impl<P> std::fmt::Debug for ObvhsBvh2<P> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("ObvhsBvh2").field("nodes", &self.bvh.nodes.len()).field("spheres", &self.spheres.len()).finish()
+        f.debug_struct("ObvhsBvh2").field("nodes", &self.bvh.nodes.len()).field("prims", &self.prims.len()).finish()
     }
 }
 
 impl ObvhsBvh2 {
-    /// Builds the tree with one of obvhs's presets (parallel where obvhs parallelizes).
+    /// Builds the tree over `spheres`' boxes with one of obvhs's presets (parallel where obvhs parallelizes).
     pub fn build(spheres: &[Sphere], quality: ObvhsQuality) -> Self {
         if spheres.is_empty() {
-            return Self { bvh: Bvh2::default(), spheres: Vec::new() };
+            return Self { bvh: Bvh2::default(), prims: Vec::new() };
         }
-        let mut build_time = Duration::ZERO;
-        let bvh = obvhs::bvh2::builder::build_bvh2(&boxes(spheres), preset(quality), &mut build_time);
-        let spheres = reordered(spheres, &bvh.primitive_indices);
-        Self { bvh, spheres }
+        let bvh = obvhs::bvh2::builder::build_bvh2(&boxes(spheres), preset(quality), &mut Duration::default());
+        let prims = reordered(spheres, &bvh.primitive_indices, std::convert::identity);
+        Self { bvh, prims }
     }
 }
 
-impl Accelerator for ObvhsBvh2 {
+impl ObvhsBvh2<RtTriangle> {
+    /// Builds the tree over `mesh`'s triangles with obvhs's triangle builder and one of its presets.
+    pub fn build_mesh(mesh: &Mesh, quality: ObvhsQuality) -> Self {
+        let triangles = obvhs_triangles(mesh);
+        if triangles.is_empty() {
+            return Self { bvh: Bvh2::default(), prims: Vec::new() };
+        }
+        let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(&triangles, preset(quality), &mut Duration::default());
+        let prims = reordered(&triangles, &bvh.primitive_indices, |t| RtTriangle::from(&t));
+        Self { bvh, prims }
+    }
+}
+
+impl<P: ObvhsLeaf> Accelerator for ObvhsBvh2<P> {
     #[inline]
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
         let mut hit = RayHit::none();
         let found = self.bvh.ray_traverse(obvhs_ray(ray), &mut hit, |r, id| {
             counters.prim_test();
-            // `id` is a primitive slot of this tree: it indexes the reordered spheres directly.
-            self.spheres[id].intersect(ray, r.tmax).unwrap_or(f32::INFINITY)
+            // `id` is a primitive slot of this tree: it indexes the reordered primitives directly.
+            self.prims[id].hit(ray, r)
         });
         found.then(|| Hit { t: hit.t, prim: self.bvh.primitive_indices[hit.primitive_id as usize] })
     }
@@ -107,7 +159,7 @@ impl Accelerator for ObvhsBvh2 {
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
         !self.bvh.ray_traverse_miss(obvhs_ray(ray), |r, id| {
             counters.prim_test();
-            self.spheres[id].intersect(ray, r.tmax).unwrap_or(f32::INFINITY)
+            self.prims[id].hit(ray, r)
         })
     }
 
@@ -116,7 +168,7 @@ impl Accelerator for ObvhsBvh2 {
         let nodes = &self.bvh.nodes;
         let bytes = size_of_val(nodes.as_slice())
             + size_of_val(self.bvh.primitive_indices.as_slice())
-            + size_of_val(self.spheres.as_slice());
+            + size_of_val(self.prims.as_slice());
         let mut s = TreeStats { nodes: 0, leaves: 0, depth: 0, bytes, sah_cost: 0.0 };
         if nodes.is_empty() {
             return s;
@@ -143,36 +195,56 @@ impl Accelerator for ObvhsBvh2 {
     }
 }
 
-/// obvhs's compressed wide BVH8 (80-byte quantized nodes, up to 3 spheres a leaf), traversed by `CwBvh::ray_traverse`.
-#[derive(Clone, Debug)]
-pub struct ObvhsCwbvh {
+/// obvhs's compressed wide BVH8 (80-byte quantized nodes, up to 3 primitives a leaf) over spheres or
+/// [`RtTriangle`]s, traversed by `CwBvh::ray_traverse`.
+#[derive(Clone)]
+pub struct ObvhsCwbvh<P = Sphere> {
     /// `None` for an empty scene (obvhs's traversal expects a root node).
     bvh: Option<CwBvh>,
-    /// Spheres in obvhs's primitive order.
-    spheres: Vec<Sphere>,
+    /// Primitives in obvhs's primitive order.
+    prims: Vec<P>,
 }
 
-impl ObvhsCwbvh {
-    /// Builds the tree with one of obvhs's presets (parallel where obvhs parallelizes).
-    pub fn build(spheres: &[Sphere], quality: ObvhsQuality) -> Self {
-        if spheres.is_empty() {
-            return Self { bvh: None, spheres: Vec::new() };
-        }
-        let mut build_time = Duration::ZERO;
-        let bvh = obvhs::cwbvh::builder::build_cwbvh(&boxes(spheres), preset(quality), &mut build_time);
-        let spheres = reordered(spheres, &bvh.primitive_indices);
-        Self { bvh: Some(bvh), spheres }
+impl<P> std::fmt::Debug for ObvhsCwbvh<P> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let nodes = self.bvh.as_ref().map_or(0, |b| b.nodes.len());
+        f.debug_struct("ObvhsCwbvh").field("nodes", &nodes).field("prims", &self.prims.len()).finish()
     }
 }
 
-impl Accelerator for ObvhsCwbvh {
+impl ObvhsCwbvh {
+    /// Builds the tree over `spheres`' boxes with one of obvhs's presets (parallel where obvhs parallelizes).
+    pub fn build(spheres: &[Sphere], quality: ObvhsQuality) -> Self {
+        if spheres.is_empty() {
+            return Self { bvh: None, prims: Vec::new() };
+        }
+        let bvh = obvhs::cwbvh::builder::build_cwbvh(&boxes(spheres), preset(quality), &mut Duration::default());
+        let prims = reordered(spheres, &bvh.primitive_indices, std::convert::identity);
+        Self { bvh: Some(bvh), prims }
+    }
+}
+
+impl ObvhsCwbvh<RtTriangle> {
+    /// Builds the tree over `mesh`'s triangles with obvhs's triangle builder and one of its presets.
+    pub fn build_mesh(mesh: &Mesh, quality: ObvhsQuality) -> Self {
+        let triangles = obvhs_triangles(mesh);
+        if triangles.is_empty() {
+            return Self { bvh: None, prims: Vec::new() };
+        }
+        let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(&triangles, preset(quality), &mut Duration::default());
+        let prims = reordered(&triangles, &bvh.primitive_indices, |t| RtTriangle::from(&t));
+        Self { bvh: Some(bvh), prims }
+    }
+}
+
+impl<P: ObvhsLeaf> Accelerator for ObvhsCwbvh<P> {
     #[inline]
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
         let bvh = self.bvh.as_ref()?;
         let mut hit = RayHit::none();
         let found = bvh.ray_traverse(obvhs_ray(ray), &mut hit, |r, id| {
             counters.prim_test();
-            self.spheres[id].intersect(ray, r.tmax).unwrap_or(f32::INFINITY)
+            self.prims[id].hit(ray, r)
         });
         found.then(|| Hit { t: hit.t, prim: bvh.primitive_indices[hit.primitive_id as usize] })
     }
@@ -182,17 +254,17 @@ impl Accelerator for ObvhsCwbvh {
         let Some(bvh) = &self.bvh else { return false };
         !bvh.ray_traverse_miss(obvhs_ray(ray), |r, id| {
             counters.prim_test();
-            self.spheres[id].intersect(ray, r.tmax).unwrap_or(f32::INFINITY)
+            self.prims[id].hit(ray, r)
         })
     }
 
-    /// Wide nodes, leaves (child slots holding spheres) and depth; `sah_cost` is 0 (the binary cost model
+    /// Wide nodes, leaves (child slots holding primitives) and depth; `sah_cost` is 0 (the binary cost model
     /// does not apply to 8-wide nodes).
     fn stats(&self) -> TreeStats {
         let Some(bvh) = &self.bvh else { return TreeStats { nodes: 0, leaves: 0, depth: 0, bytes: 0, sah_cost: 0.0 } };
         let bytes = size_of_val(bvh.nodes.as_slice())
             + size_of_val(bvh.primitive_indices.as_slice())
-            + size_of_val(self.spheres.as_slice());
+            + size_of_val(self.prims.as_slice());
         let mut s = TreeStats { nodes: 0, leaves: 0, depth: 0, bytes, sah_cost: 0.0 };
         let mut stack = vec![(0usize, 0usize)];
         while let Some((i, depth)) = stack.pop() {
@@ -223,7 +295,10 @@ mod tests {
     use super::*;
     use schema::{Named, PeerKind};
     use tracer::agreement::Strictness;
+    use tracer::counters::NoCounters;
     use tracer::testing::{Reference, scenes};
+
+    use crate::peers::testing::{TestMesh, TriangleReference, test_meshes};
 
     /// Every test scene, built at three presets: leaves call our own `Sphere::intersect`, so hit distances must
     /// be bit-identical to brute force's.
@@ -272,6 +347,57 @@ mod tests {
             assert!(st.nodes > 0 && st.leaves > 0 && st.depth > 0 && st.bytes > spheres.len() * 16, "{st:?}");
         }
         assert!(bvh2.stats().sah_cost > 0.0);
+    }
+
+    /// Every test mesh, built at three presets (the slowest splits triangle boxes): closest hit and occlusion
+    /// agree with f64 brute force (edge ties tolerated and counted), hits name a triangle hit at that distance,
+    /// and a hit's `t` is, bit for bit, obvhs's own `Triangle::intersect` of the triangle it names (the leaves run
+    /// obvhs's test). Answers that differ from obvhs's test over every triangle (brute force) are counted: the
+    /// traversal's box tests may cull a hit right on an edge or vertex (node boxes are not padded).
+    fn triangles_agree_with_brute_force<A: Accelerator>(name: &str, build: impl Fn(&Mesh, ObvhsQuality) -> A) {
+        let (mut answers, mut ties, mut culled) = (0, 0, 0);
+        for TestMesh { label, mesh, rays } in test_meshes() {
+            let reference = TriangleReference::new(&mesh, &rays);
+            let triangles = obvhs_triangles(&mesh);
+            let own: Vec<Option<f32>> = rays.iter().map(|ray| obvhs_closest(&triangles, ray)).collect();
+            for quality in [ObvhsQuality::Fastest, ObvhsQuality::Medium, ObvhsQuality::VerySlow] {
+                let what = format!("{name} triangles {} {label}", quality.name());
+                let accel = build(&mesh, quality);
+                let tally = reference.assert_agrees(&what, &accel);
+                (answers, ties) = (answers + tally.answers, ties + tally.ties);
+                for (i, (ray, own)) in rays.iter().zip(&own).enumerate() {
+                    let hit = accel.intersect(ray, &mut NoCounters);
+                    if let Some(h) = hit {
+                        let t = triangles[h.prim as usize].intersect(&obvhs_ray(ray));
+                        assert_eq!(h.t.to_bits(), t.to_bits(), "{what}: ray {i} {ray:?}: {h:?} vs obvhs's test {t}");
+                    }
+                    culled += (hit.map(|h| h.t.to_bits()) != own.map(f32::to_bits)) as usize;
+                    culled += (accel.occluded(ray, &mut NoCounters) != own.is_some()) as usize;
+                }
+                if !mesh.indices.is_empty() {
+                    let st = accel.stats();
+                    assert!(st.nodes > 0 && st.leaves > 0 && st.bytes > mesh.indices.len() * 48, "{what}: {st:?}");
+                }
+            }
+        }
+        eprintln!("{name} triangles: {answers} answers, {ties} edge ties; {culled} differ from obvhs's brute force");
+    }
+
+    /// obvhs's own triangle test over every triangle: the closest `t` below `tmax` (what its traversal keeps).
+    fn obvhs_closest(triangles: &[ObvhsTriangle], ray: &Ray) -> Option<f32> {
+        let r = obvhs_ray(ray);
+        let t = triangles.iter().map(|t| t.intersect(&r)).fold(f32::INFINITY, f32::min);
+        (t < r.tmax).then_some(t)
+    }
+
+    #[test]
+    fn triangle_bvh2_agrees_with_brute_force() {
+        triangles_agree_with_brute_force(PeerKind::ObvhsBvh2.name(), ObvhsBvh2::build_mesh);
+    }
+
+    #[test]
+    fn triangle_cwbvh_agrees_with_brute_force() {
+        triangles_agree_with_brute_force(PeerKind::ObvhsCwbvh.name(), ObvhsCwbvh::build_mesh);
     }
 
     #[test]

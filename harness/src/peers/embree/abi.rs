@@ -42,10 +42,18 @@ pub const RTC_SCENE_FLAG_NONE: u32 = 0;
 /// `RTCSceneFlags::RTC_SCENE_FLAG_ROBUST`.
 pub const RTC_SCENE_FLAG_ROBUST: u32 = 4;
 
+/// `RTCGeometryType::RTC_GEOMETRY_TYPE_TRIANGLE`.
+pub const RTC_GEOMETRY_TYPE_TRIANGLE: u32 = 0;
 /// `RTCGeometryType::RTC_GEOMETRY_TYPE_SPHERE_POINT`.
 pub const RTC_GEOMETRY_TYPE_SPHERE_POINT: u32 = 50;
+/// `RTCBufferType::RTC_BUFFER_TYPE_INDEX`.
+pub const RTC_BUFFER_TYPE_INDEX: u32 = 0;
 /// `RTCBufferType::RTC_BUFFER_TYPE_VERTEX`.
 pub const RTC_BUFFER_TYPE_VERTEX: u32 = 1;
+/// `RTCFormat::RTC_FORMAT_UINT3`: three `u32` (a triangle's vertex indices).
+pub const RTC_FORMAT_UINT3: u32 = 0x5003;
+/// `RTCFormat::RTC_FORMAT_FLOAT3`: three `f32` (a vertex position).
+pub const RTC_FORMAT_FLOAT3: u32 = 0x9003;
 /// `RTCFormat::RTC_FORMAT_FLOAT4`.
 pub const RTC_FORMAT_FLOAT4: u32 = 0x9004;
 

@@ -52,6 +52,8 @@ pub enum EmbreeError {
     Unavailable(EmbreeUnavailable),
     /// Embree reported an error (its code and message).
     Api(String),
+    /// The input cannot be handed to Embree (e.g. a triangle indexing past the vertices).
+    Input(String),
 }
 
 impl fmt::Display for EmbreeError {
@@ -59,6 +61,7 @@ impl fmt::Display for EmbreeError {
         match self {
             EmbreeError::Unavailable(e) => e.fmt(f),
             EmbreeError::Api(msg) => write!(f, "Embree error: {msg}"),
+            EmbreeError::Input(msg) => write!(f, "invalid input for Embree: {msg}"),
         }
     }
 }

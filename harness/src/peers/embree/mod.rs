@@ -3,7 +3,8 @@
 //! - [`abi`]: the C structs, constants and function types, sizes pinned at compile time;
 //! - [`library`]: finding `libembree4` (`EMBREE_LIB`, the system, an `embreex` wheel) and resolving symbols;
 //! - [`device`]: devices, their configuration and error capture;
-//! - [`scene`]: a committed scene of sphere points implementing [`tracer::accel::Accelerator`].
+//! - [`scene`]: a committed scene of sphere points ([`EmbreeSpheres`]) or triangles ([`EmbreeTriangles`]),
+//!   implementing [`tracer::accel::Accelerator`], with 8- and 16-wide packet queries.
 
 pub mod abi;
 pub mod device;
@@ -15,4 +16,4 @@ mod tests;
 
 pub use device::{EmbreeConfig, EmbreeDevice};
 pub use library::{EmbreeLibrary, EmbreeUnavailable};
-pub use scene::EmbreeSpheres;
+pub use scene::{EmbreeGeometry, EmbreeScene, EmbreeSpheres, EmbreeTriangles, SpherePoints, Triangles};

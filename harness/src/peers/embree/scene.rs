@@ -1,35 +1,153 @@
-//! A committed Embree scene of sphere points: single-ray and 8- and 16-wide packet queries.
+//! Committed Embree scenes of one geometry each — sphere points ([`EmbreeSpheres`]) or triangles
+//! ([`EmbreeTriangles`]) — with single-ray and 8- and 16-wide packet queries.
+//!
+//! Both are one type, [`EmbreeScene`], generic over an [`EmbreeGeometry`]: scene creation, commit, error
+//! capture and every query are shared; the two differ only in the geometry they attach.
 
 use std::ffi::c_int;
+use std::marker::PhantomData;
 use std::sync::Arc;
 
 use tracer::accel::{Accelerator, Hit, TreeStats};
 use tracer::counters::Counters;
 use tracer::geometry::{Ray, Sphere};
+use tracer::scene::mesh::Mesh;
 
 use super::abi::*;
 use super::device::{DeviceInfo, DeviceInner, EmbreeDevice, EmbreeError, EmbreeQuality};
 
-/// Our spheres as one Embree `RTC_GEOMETRY_TYPE_SPHERE_POINT` geometry (geomID 0) in a committed scene.
-pub struct EmbreeSpheres {
-    device: Arc<DeviceInner>,
-    scene: RTCScene,
-    count: usize,
+/// One kind of Embree geometry: what a scene of it is built from and how its buffers are filled.
+pub trait EmbreeGeometry {
+    /// What the scene is built from.
+    type Input: ?Sized;
+    /// The scene type's name, for `Debug`.
+    const NAME: &'static str;
+    /// Embree's `RTCGeometryType`.
+    const TYPE: u32;
+    /// Primitives in `input` (none: the scene is committed empty, no geometry attached).
+    fn count(input: &Self::Input) -> usize;
+    /// Bytes of the buffers handed to Embree.
+    fn bytes(input: &Self::Input) -> usize;
+    /// Fills the buffers of a new geometry of type [`EmbreeGeometry::TYPE`] from `input`.
+    fn fill(geometry: &mut NewGeometry<'_>, input: &Self::Input) -> Result<(), EmbreeError>;
 }
 
-// SAFETY: a committed Embree scene is immutable and Embree documents concurrent rtcIntersect*/rtcOccluded*
-// calls on it from any number of threads as safe; the handle is only released in Drop (exclusive access).
-unsafe impl Send for EmbreeSpheres {}
-// SAFETY: see `Send`; queries take `&self` and only read the scene.
-unsafe impl Sync for EmbreeSpheres {}
+/// Spheres as `RTC_GEOMETRY_TYPE_SPHERE_POINT`: one FLOAT4 vertex (x, y, z, radius) per sphere.
+#[derive(Debug)]
+pub enum SpherePoints {}
 
-impl std::fmt::Debug for EmbreeSpheres {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("EmbreeSpheres").field("spheres", &self.count).finish_non_exhaustive()
+impl EmbreeGeometry for SpherePoints {
+    type Input = [Sphere];
+    const NAME: &'static str = "EmbreeSpheres";
+    const TYPE: u32 = RTC_GEOMETRY_TYPE_SPHERE_POINT;
+
+    fn count(spheres: &[Sphere]) -> usize {
+        spheres.len()
+    }
+
+    fn bytes(spheres: &[Sphere]) -> usize {
+        spheres.len() * 16
+    }
+
+    fn fill(geometry: &mut NewGeometry<'_>, spheres: &[Sphere]) -> Result<(), EmbreeError> {
+        let items = geometry.buffer::<[f32; 4]>(RTC_BUFFER_TYPE_VERTEX, RTC_FORMAT_FLOAT4, spheres.len(), "FLOAT4")?;
+        for (item, s) in items.iter_mut().zip(spheres) {
+            *item = [s.center.x, s.center.y, s.center.z, s.radius];
+        }
+        Ok(())
     }
 }
 
-impl Drop for EmbreeSpheres {
+/// A triangle mesh as `RTC_GEOMETRY_TYPE_TRIANGLE`: a FLOAT3 vertex buffer and a UINT3 index buffer.
+#[derive(Debug)]
+pub enum Triangles {}
+
+impl EmbreeGeometry for Triangles {
+    type Input = Mesh;
+    const NAME: &'static str = "EmbreeTriangles";
+    const TYPE: u32 = RTC_GEOMETRY_TYPE_TRIANGLE;
+
+    fn count(mesh: &Mesh) -> usize {
+        mesh.indices.len()
+    }
+
+    fn bytes(mesh: &Mesh) -> usize {
+        mesh.positions.len() * 12 + mesh.indices.len() * 12
+    }
+
+    /// Checks every index first: Embree does not, and would read past the vertex buffer.
+    fn fill(geometry: &mut NewGeometry<'_>, mesh: &Mesh) -> Result<(), EmbreeError> {
+        let n = mesh.positions.len();
+        if let Some((i, t)) = mesh.indices.iter().enumerate().find(|(_, t)| t.iter().any(|&k| k as usize >= n)) {
+            return Err(EmbreeError::Input(format!("triangle {i} {t:?} indexes past the mesh's {n} vertices")));
+        }
+        let vertices = geometry.buffer::<[f32; 3]>(RTC_BUFFER_TYPE_VERTEX, RTC_FORMAT_FLOAT3, n, "FLOAT3")?;
+        for (v, p) in vertices.iter_mut().zip(&mesh.positions) {
+            *v = p.to_array();
+        }
+        let indices =
+            geometry.buffer::<[u32; 3]>(RTC_BUFFER_TYPE_INDEX, RTC_FORMAT_UINT3, mesh.indices.len(), "UINT3")?;
+        indices.copy_from_slice(&mesh.indices);
+        Ok(())
+    }
+}
+
+/// A geometry being filled: hands out buffers Embree allocates (padded for its 16-byte loads) and owns.
+pub struct NewGeometry<'a> {
+    device: &'a DeviceInner,
+    raw: RTCGeometry,
+}
+
+impl NewGeometry<'_> {
+    /// A new buffer of `count` items of `T` (`format`, stride `size_of::<T>()`) in slot 0 of `kind`, checked to
+    /// be 16-byte aligned; `what` names it in errors.
+    fn buffer<T: Copy>(&mut self, kind: u32, format: u32, count: usize, what: &str) -> Result<&mut [T], EmbreeError> {
+        let api = self.device.lib.api;
+        // SAFETY: a live geometry of a type taking this buffer kind and format; the stride is the item size.
+        let buffer = unsafe { (api.set_new_geometry_buffer)(self.raw, kind, 0, format, size_of::<T>(), count) };
+        if buffer.is_null() {
+            let why = self.device.take_error().unwrap_or_else(|| "rtcSetNewGeometryBuffer returned null".into());
+            return Err(EmbreeError::Api(format!("{what} buffer of {count} items: {why}")));
+        }
+        let buffer = aligned_mut(buffer.cast::<T>(), 16, &format!("the {what} buffer Embree returned"));
+        // SAFETY: Embree returned a writable buffer of `count` items of this stride, aligned (checked) beyond
+        // `T`'s alignment, that lives as long as the geometry (we hold `&mut self` of it).
+        Ok(unsafe { std::slice::from_raw_parts_mut(buffer, count) })
+    }
+}
+
+/// A committed Embree scene holding one geometry of kind `G` (geomID 0): [`EmbreeSpheres`] or
+/// [`EmbreeTriangles`].
+pub struct EmbreeScene<G> {
+    device: Arc<DeviceInner>,
+    scene: RTCScene,
+    /// Primitives in the geometry.
+    count: usize,
+    /// Bytes of the buffers handed to Embree.
+    bytes: usize,
+    geometry: PhantomData<fn() -> G>,
+}
+
+/// Our spheres as one Embree `RTC_GEOMETRY_TYPE_SPHERE_POINT` geometry in a committed scene.
+pub type EmbreeSpheres = EmbreeScene<SpherePoints>;
+
+/// A triangle mesh as one Embree `RTC_GEOMETRY_TYPE_TRIANGLE` geometry in a committed scene; hits report the
+/// triangle's index.
+pub type EmbreeTriangles = EmbreeScene<Triangles>;
+
+// SAFETY: a committed Embree scene is immutable and Embree documents concurrent rtcIntersect*/rtcOccluded*
+// calls on it from any number of threads as safe; the handle is only released in Drop (exclusive access).
+unsafe impl<G> Send for EmbreeScene<G> {}
+// SAFETY: see `Send`; queries take `&self` and only read the scene.
+unsafe impl<G> Sync for EmbreeScene<G> {}
+
+impl<G: EmbreeGeometry> std::fmt::Debug for EmbreeScene<G> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct(G::NAME).field("primitives", &self.count).finish_non_exhaustive()
+    }
+}
+
+impl<G> Drop for EmbreeScene<G> {
     fn drop(&mut self) {
         // SAFETY: `scene` came from rtcNewScene and is released once; the device outlives it (we hold an Arc).
         unsafe { (self.device.lib.api.release_scene)(self.scene) };
@@ -45,6 +163,7 @@ pub fn ray_hit(ray: &Ray) -> RTCRayHit {
     }
 }
 
+/// Our ray in Embree's layout: `t_min`, `t_max` become `tnear`, `tfar`.
 #[inline(always)]
 fn rtc_ray(ray: &Ray) -> RTCRay {
     RTCRay {
@@ -63,11 +182,11 @@ fn rtc_ray(ray: &Ray) -> RTCRay {
     }
 }
 
-impl EmbreeSpheres {
+impl<G: EmbreeGeometry> EmbreeScene<G> {
     /// Builds (commits) the scene; Embree errors reported during the build become `Err`.
     ///
     /// The commit runs on TBB's pool, not rayon's: do not build while rayon traces, or the pools oversubscribe.
-    pub fn build(device: &EmbreeDevice, spheres: &[Sphere], quality: EmbreeQuality) -> Result<Self, EmbreeError> {
+    pub fn build(device: &EmbreeDevice, input: &G::Input, quality: EmbreeQuality) -> Result<Self, EmbreeError> {
         let inner = device.inner.clone();
         let api = inner.lib.api;
         inner.take_error();
@@ -78,14 +197,14 @@ impl EmbreeSpheres {
             return Err(EmbreeError::Api(why));
         }
         // From here on `Drop` releases the scene on every path.
-        let this = Self { device: inner, scene, count: spheres.len() };
+        let this = Self { device: inner, scene, count: G::count(input), bytes: G::bytes(input), geometry: PhantomData };
         // SAFETY: a live scene and enum values from the headers.
         unsafe {
             (api.set_scene_build_quality)(scene, super::device::build_quality(quality));
             (api.set_scene_flags)(scene, RTC_SCENE_FLAG_NONE);
         }
-        if !spheres.is_empty() {
-            this.attach_spheres(spheres)?;
+        if this.count > 0 {
+            this.attach(input)?;
         }
         // SAFETY: a live scene; this is the BVH build.
         unsafe { (api.commit_scene)(scene) };
@@ -95,36 +214,24 @@ impl EmbreeSpheres {
         }
     }
 
-    fn attach_spheres(&self, spheres: &[Sphere]) -> Result<(), EmbreeError> {
+    /// Creates a geometry of type `G`, fills it from `input`, commits it and attaches it to the scene.
+    fn attach(&self, input: &G::Input) -> Result<(), EmbreeError> {
         let api = self.device.lib.api;
         // SAFETY: a live device and a geometry type from the headers.
-        let geometry = unsafe { (api.new_geometry)(self.device.raw, RTC_GEOMETRY_TYPE_SPHERE_POINT) };
-        if geometry.is_null() {
+        let raw = unsafe { (api.new_geometry)(self.device.raw, G::TYPE) };
+        if raw.is_null() {
             return Err(EmbreeError::Api(self.device.take_error().unwrap_or_else(|| "rtcNewGeometry failed".into())));
         }
-        // One FLOAT4 (x, y, z, r) per sphere, in a buffer Embree allocates (and pads for 16-byte loads) and owns.
-        // SAFETY: a live geometry; stride 16 and `len` items of FLOAT4.
-        let buffer = unsafe {
-            (api.set_new_geometry_buffer)(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 16, spheres.len())
-        } as *mut [f32; 4];
-        let result = if buffer.is_null() {
-            Err(EmbreeError::Api(self.device.take_error().unwrap_or_else(|| "rtcSetNewGeometryBuffer failed".into())))
-        } else {
-            let buffer = aligned_mut(buffer, 16, "the FLOAT4 vertex buffer Embree returned");
-            // SAFETY: Embree returned a writable buffer of `len` FLOAT4 items, 16-byte aligned (checked).
-            let items = unsafe { std::slice::from_raw_parts_mut(buffer, spheres.len()) };
-            for (item, s) in items.iter_mut().zip(spheres) {
-                *item = [s.center.x, s.center.y, s.center.z, s.radius];
-            }
-            // SAFETY: a live geometry and scene; the scene keeps its own reference after attaching.
+        let result = G::fill(&mut NewGeometry { device: &self.device, raw }, input);
+        if result.is_ok() {
+            // SAFETY: a live, filled geometry and a live scene; the scene keeps its own reference after attaching.
             unsafe {
-                (api.commit_geometry)(geometry);
-                (api.attach_geometry)(self.scene, geometry);
+                (api.commit_geometry)(raw);
+                (api.attach_geometry)(self.scene, raw);
             }
-            Ok(())
-        };
+        }
         // SAFETY: drops our reference; the scene (if attached) holds the geometry from now on.
-        unsafe { (api.release_geometry)(geometry) };
+        unsafe { (api.release_geometry)(raw) };
         result
     }
 
@@ -211,7 +318,7 @@ impl<const N: usize, P: RTCRayHitN<N>> PacketCall<N, P> {
     }
 }
 
-impl Accelerator for EmbreeSpheres {
+impl<G> Accelerator for EmbreeScene<G> {
     #[inline]
     fn intersect<C: Counters>(&self, ray: &Ray, _counters: &mut C) -> Option<Hit> {
         let mut rh = ray_hit(ray);
@@ -232,6 +339,6 @@ impl Accelerator for EmbreeSpheres {
 
     /// Embree does not expose its tree: only the input bytes are known (nodes, depth and SAH report 0).
     fn stats(&self) -> TreeStats {
-        TreeStats { nodes: 0, leaves: 0, depth: 0, bytes: self.count * 16, sah_cost: 0.0 }
+        TreeStats { nodes: 0, leaves: 0, depth: 0, bytes: self.bytes, sah_cost: 0.0 }
     }
 }

@@ -1,4 +1,5 @@
-//! Embree against brute force: single rays, occlusion and 8- and 16-wide packets, plus the loader's error.
+//! Embree against brute force, over spheres and triangle meshes: single rays, occlusion and 8- and 16-wide
+//! packets, plus the loader's error.
 
 use std::path::PathBuf;
 
@@ -11,7 +12,7 @@ use tracer::testing::{Reference, TestScene, scenes};
 
 use super::library::SearchInputs;
 use super::*;
-use crate::peers::testing::embree_device;
+use crate::peers::testing::{ClosestComparison, TestMesh, TriangleReference, embree_device, test_meshes};
 
 /// The last test scene with `n` spheres (clustered spheres, seed 2).
 fn scene_of(n: usize) -> TestScene {
@@ -45,22 +46,22 @@ fn packets_agree_with_brute_force() {
     for TestScene { label, spheres, rays } in scenes() {
         let scene = EmbreeSpheres::build(&device, &spheres, EmbreeQuality::Medium).expect("build");
         let reference = Reference::new(&spheres, &rays);
-        check_packets(&reference, &label, &rays, |chunk| scene.intersect16(chunk));
-        check_packets(&reference, &label, &rays, |chunk| scene.intersect8(chunk));
+        let start = |what: &str| reference.compare(what, Strictness::Arbitrated);
+        check_packets(start, &label, &rays, |chunk| scene.intersect16(chunk));
+        check_packets(start, &label, &rays, |chunk| scene.intersect8(chunk));
     }
 }
 
 /// `query` (an `intersectN`) in full packets of N, then the same rays in partial packets of 7 (lanes 7..N
-/// inactive), against brute force.
-fn check_packets<const N: usize>(
-    reference: &Reference,
+/// inactive), against brute force (`start` begins a comparison with it).
+fn check_packets<const N: usize, C: ClosestComparison>(
+    start: impl Fn(&str) -> C,
     label: &str,
     rays: &[Ray],
     query: impl Fn(&[Ray]) -> [Option<Hit>; N],
 ) {
     for width in [N, 7] {
-        let mut comparison =
-            reference.compare(&format!("embree intersect{N} in packets of {width} {label}"), Strictness::Arbitrated);
+        let mut comparison = start(&format!("embree intersect{N} in packets of {width} {label}"));
         for (c, chunk) in rays.chunks(width).enumerate() {
             let got = query(chunk);
             for (lane, &hit) in got[..chunk.len()].iter().enumerate() {
@@ -73,6 +74,49 @@ fn check_packets<const N: usize>(
         }
         comparison.finish();
     }
+}
+
+/// Every test mesh at every build quality: closest hit and occlusion, one ray at a time and in a batch, agree
+/// with f64 brute force (edge ties tolerated and counted), and hits name a triangle hit at that distance.
+#[test]
+fn triangles_agree_with_brute_force() {
+    let Some(device) = embree_device("triangles_agree_with_brute_force") else { return };
+    for TestMesh { label, mesh, rays } in test_meshes() {
+        let reference = TriangleReference::new(&mesh, &rays);
+        for &quality in EmbreeQuality::ALL {
+            let scene = EmbreeTriangles::build(&device, &mesh, quality).expect("build");
+            assert_eq!(scene.stats().bytes, 12 * (mesh.positions.len() + mesh.indices.len()));
+            let tally = reference.assert_agrees(&format!("embree triangles {} {label}", quality.name()), &scene);
+            eprintln!(
+                "embree triangles {} {label}: {} answers, {} edge ties",
+                quality.name(),
+                tally.answers,
+                tally.ties
+            );
+        }
+    }
+}
+
+#[test]
+fn triangle_packets_agree_with_brute_force() {
+    let Some(device) = embree_device("triangle_packets_agree_with_brute_force") else { return };
+    for TestMesh { label, mesh, rays } in test_meshes() {
+        let scene = EmbreeTriangles::build(&device, &mesh, EmbreeQuality::Medium).expect("build");
+        let reference = TriangleReference::new(&mesh, &rays);
+        let start = |what: &str| reference.compare(what);
+        check_packets(start, &label, &rays, |chunk| scene.intersect16(chunk));
+        check_packets(start, &label, &rays, |chunk| scene.intersect8(chunk));
+    }
+}
+
+#[test]
+fn a_triangle_indexing_past_the_vertices_is_an_error() {
+    let Some(device) = embree_device("a_triangle_indexing_past_the_vertices_is_an_error") else { return };
+    let mut mesh = tracer::scene::random_triangles(10, 1);
+    mesh.indices[7][2] = 30;
+    let err = EmbreeTriangles::build(&device, &mesh, EmbreeQuality::Medium).expect_err("index 30 of 30 vertices");
+    assert!(matches!(err, device::EmbreeError::Input(_)), "{err}");
+    assert!(err.to_string().contains("triangle 7"), "{err}");
 }
 
 #[test]
@@ -157,11 +201,15 @@ fn camera_hits_match_exactly_without_excuses() {
     }
 }
 
+/// Every instruction set this CPU runs, pinned: the native packet width it reports, and sphere and triangle
+/// scenes agreeing with brute force.
 #[test]
 fn pinned_isa_sets_the_native_packet_width() {
     let Some(_) = embree_device("pinned_isa_sets_the_native_packet_width") else { return };
     let TestScene { spheres, rays, .. } = scene_of(50);
     let reference = Reference::new(&spheres, &rays);
+    let mesh = test_meshes().swap_remove(0);
+    let mesh_reference = TriangleReference::new(&mesh.mesh, &mesh.rays);
     let on_cpu = [
         true,
         true,
@@ -181,6 +229,8 @@ fn pinned_isa_sets_the_native_packet_width() {
         assert_eq!(device.info().native_packet, width, "isa={isa}: {:?}", device.info());
         let scene = EmbreeSpheres::build(&device, &spheres, EmbreeQuality::Medium).expect(isa);
         reference.assert_agrees(&format!("embree isa={isa}"), &scene, Strictness::Arbitrated);
+        let triangles = EmbreeTriangles::build(&device, &mesh.mesh, EmbreeQuality::Medium).expect(isa);
+        mesh_reference.assert_agrees(&format!("embree triangles isa={isa} {}", mesh.label), &triangles);
     }
 }
 
