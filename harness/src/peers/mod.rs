@@ -2,12 +2,16 @@
 //! so every renderer and kernel runs on them unchanged.
 //!
 //! - [`obvhs`]: obvhs 0.4's BVH2 and compressed wide BVH8, with our ray-sphere test in the leaves;
-//! - [`embree`]: Embree 4 (sphere points), loaded at run time; single rays and 16-wide packets.
+//! - [`embree`]: Embree 4 (sphere points), loaded at run time; single rays and 16-wide packets;
+//! - [`tinybvh`]: tinybvh 1.6.8 (triangle meshes) through our own C shim over the header the `tinybvh-rs` crate
+//!   bundles, compiled per x86-64 ISA level and chosen at run time; its binary BVH, BVH4_CPU and BVH8_CPU.
 //!
-//! Peers cannot report node, box or primitive counts (obvhs leaves count primitive tests; Embree counts nothing).
+//! Peers cannot report node, box or primitive counts (obvhs leaves count primitive tests; Embree and tinybvh count
+//! nothing).
 
 pub mod embree;
 pub mod obvhs;
+pub mod tinybvh;
 
 #[cfg(test)]
 mod testing;
@@ -16,6 +20,7 @@ use serde::{Deserialize, Serialize};
 
 pub use self::embree::{EmbreeConfig, EmbreeDevice, EmbreeLibrary, EmbreeSpheres, EmbreeUnavailable};
 pub use self::obvhs::{ObvhsBvh2, ObvhsCwbvh};
+pub use self::tinybvh::{TinyBvh, TinyBvhError, TinyIsa, TinyLayout, TinyQuality};
 pub use schema::PeerKind;
 
 /// Where the Embree library was found and its version, for `harness list`.
