@@ -67,7 +67,6 @@ impl RayCandidates {
     }
 
     /// The candidate for primitive `prim`, if the f32 test may report it.
-    #[cfg(test)]
     pub fn get(&self, prim: u32) -> Option<&Candidate> {
         self.list.iter().find(|c| c.prim == prim)
     }

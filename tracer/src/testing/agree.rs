@@ -3,7 +3,7 @@
 
 use crate::accel::wide::WidePrimitive;
 use crate::accel::{AccelVisitor, Accelerator, BuiltAccel, Hit, List};
-use crate::agreement::{Answer, BruteForce64, ExactPrimitive, Outcome, Strictness, check};
+use crate::agreement::{Answer, BruteForce64, ExactPrimitive, Outcome, Strictness, check, t_tolerance};
 use crate::counters::NoCounters;
 use crate::geometry::{Primitive, Ray, Sphere, Triangle, TrianglePrimitive};
 use crate::render::PrimaryHits;
@@ -46,20 +46,27 @@ impl<'a, X: ExactPrimitive> Reference<'a, X> {
 
     /// Starts comparing answers to these rays; `what` names the backend in the failure message.
     pub fn compare(&self, what: &str, strictness: Strictness) -> Comparison<'_, 'a, X> {
-        Comparison { reference: self, what: what.to_owned(), strictness, bad: Vec::new(), excused: Vec::new() }
+        Comparison {
+            reference: self,
+            what: what.to_owned(),
+            strictness,
+            bad: Vec::new(),
+            excused: Vec::new(),
+            answers: 0,
+        }
     }
 
     /// Panics (listing the disagreements) unless `accel` answers every ray like brute force: closest hit and
     /// occlusion, under `strictness`, one ray at a time and as one batch (the path ray sets are traced and timed with:
-    /// packets, where the structure has them).
+    /// packets, where the structure has them). Returns the tally of the single-ray answers.
     #[track_caller]
-    pub fn assert_agrees<A: Accelerator>(&self, what: &str, accel: &A, strictness: Strictness) {
+    pub fn assert_agrees<A: Accelerator>(&self, what: &str, accel: &A, strictness: Strictness) -> Tally {
         let mut comparison = self.compare(what, strictness);
         for (i, ray) in self.rays.iter().enumerate() {
             comparison.closest(i, accel.intersect(ray, &mut NoCounters));
             comparison.occluded(i, accel.occluded(ray, &mut NoCounters));
         }
-        comparison.finish();
+        let tally = comparison.finish();
         let mut batch = self.compare(&format!("{what} (batch)"), strictness);
         let mut hits = vec![PrimaryHits::MISS; self.rays.len()];
         accel.intersect_batch(self.rays, &mut hits, &mut NoCounters);
@@ -70,6 +77,7 @@ impl<'a, X: ExactPrimitive> Reference<'a, X> {
             batch.occluded(i, occluded);
         }
         batch.finish();
+        tally
     }
 
     /// [`Reference::assert_agrees`] for whichever structure `accel` holds.
@@ -80,15 +88,25 @@ impl<'a, X: ExactPrimitive> Reference<'a, X> {
             type Output = ();
             #[track_caller]
             fn visit<A: Accelerator>(self, accel: &A) {
-                self.0.assert_agrees(self.1, accel, self.2);
+                _ = self.0.assert_agrees(self.1, accel, self.2);
             }
         }
         accel.visit(Check(self, what, strictness));
     }
 }
 
+/// What a finished comparison counted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Tally {
+    /// Answers compared.
+    pub answers: usize,
+    /// Disagreements f64 tolerated (grazing rays, edge ties).
+    pub tolerated: usize,
+}
+
 /// Answers being compared with a [`Reference`], one at a time (for backends answered in batches, e.g.
-/// packets); [`Comparison::finish`] fails if any disagreed.
+/// packets); [`Comparison::finish`] fails if any disagreed. Besides [`check`], a hit must name a primitive that f64
+/// allows at its `t`.
 #[must_use = "call `finish` to fail on disagreements"]
 #[derive(Debug)]
 pub struct Comparison<'r, 'a, X: ExactPrimitive = Sphere> {
@@ -97,6 +115,7 @@ pub struct Comparison<'r, 'a, X: ExactPrimitive = Sphere> {
     strictness: Strictness,
     bad: Vec<String>,
     excused: Vec<String>,
+    answers: usize,
 }
 
 impl<X: ExactPrimitive> Comparison<'_, '_, X> {
@@ -110,8 +129,10 @@ impl<X: ExactPrimitive> Comparison<'_, '_, X> {
         self.check(i, Answer::Occluded(got));
     }
 
-    fn check(&mut self, i: usize, got: Answer) {
+    /// Compares `got` with brute force's answer of the same kind to ray `i`.
+    pub fn check(&mut self, i: usize, got: Answer) {
         let (reference, ray) = (self.reference, &self.reference.rays[i]);
+        self.answers += 1;
         let want = match got {
             Answer::Closest(_) => Answer::Closest(reference.closest[i]),
             Answer::Occluded(_) => Answer::Occluded(reference.occluded[i]),
@@ -122,12 +143,20 @@ impl<X: ExactPrimitive> Comparison<'_, '_, X> {
             Outcome::Tolerated(why) => self.excused.push(format!("{text} ({why:?})")),
             Outcome::Mismatch(side) => self.bad.push(format!("{text} (wrong: {side:?})")),
         }
+        if let Answer::Closest(Some(hit)) = got {
+            let candidates = reference.brute.candidates_of(ray);
+            let named = candidates.get(hit.prim).map(|c| c.exact.outcomes);
+            if !named.is_some_and(|o| o.may_report(hit.t as f64, t_tolerance(ray, hit.t) as f64)) {
+                self.bad.push(format!("{text} (primitive {} cannot be hit at t = {})", hit.prim, hit.t));
+            }
+        }
     }
 
     /// Prints the excused disagreements and panics with the others (the first 8 shown), if any.
     #[track_caller]
-    pub fn finish(self) {
-        let Self { what, strictness, bad, excused, reference, .. } = self;
+    pub fn finish(self) -> Tally {
+        let Self { what, strictness, bad, excused, reference, answers } = self;
+        let tally = Tally { answers, tolerated: excused.len() };
         if !excused.is_empty() {
             eprintln!(
                 "{what}: {} disagreement(s) f64 brute force tolerates (f32 cannot decide them):\n  {}",
@@ -142,6 +171,7 @@ impl<X: ExactPrimitive> Comparison<'_, '_, X> {
             reference.rays.len(),
             bad[..bad.len().min(8)].join("\n")
         );
+        tally
     }
 }
 

@@ -17,7 +17,7 @@ mod agree;
 mod meshes;
 mod rays;
 
-pub use agree::{Comparison, Reference, assert_every_tree_agrees, assert_every_tree_agrees_on_triangles};
+pub use agree::{Comparison, Reference, Tally, assert_every_tree_agrees, assert_every_tree_agrees_on_triangles};
 pub use meshes::{TestMesh, mesh_ray_mix, test_meshes};
 pub use rays::{scene_ray_mix, sphere_ray_mix};
 

@@ -3,7 +3,7 @@
 
 use tracer::Vec3;
 use tracer::accel::{Accelerator, Hit};
-use tracer::agreement::{Answer, BruteForce64, Outcome, Strictness, check};
+use tracer::agreement::{Answer, Strictness};
 use tracer::counters::NoCounters;
 use tracer::geometry::{Ray, Triangle, TriangleTest};
 use tracer::render::PrimaryHits;
@@ -12,6 +12,7 @@ use tracer::scene::mesh::Mesh;
 use tracer::scene::{SceneKind, random_triangles, tessellate};
 
 use super::*;
+use crate::peers::testing::triangle_reference;
 
 /// Every (ISA, layout, builder) this CPU runs; fails if the shim is missing on x86-64 Linux.
 fn configurations() -> Vec<(TinyIsa, TinyLayout, TinyQuality)> {
@@ -107,69 +108,33 @@ fn ray_mix(mesh: &Mesh, scene: &tracer::scene::Scene, seed: u64) -> Vec<Ray> {
     rays
 }
 
-/// Brute force's answers to a ray set over a mesh, compared with tinybvh's.
-struct Reference {
-    triangles: Vec<Triangle>,
-    rays: Vec<Ray>,
-    closest: Vec<Option<Hit>>,
-    exact: BruteForce64<Triangle>,
-}
-
-impl Reference {
-    fn new(mesh: &Mesh, rays: Vec<Ray>) -> Self {
-        let triangles: Vec<Triangle> = mesh.triangles().collect();
-        let closest = rays.iter().map(|r| brute_closest(&triangles, r)).collect();
-        let exact = BruteForce64::new(&triangles);
-        Self { triangles, rays, closest, exact }
-    }
-
-    /// Panics unless `accel` answers every ray (closest hit and occlusion, one at a time and in batches, which
-    /// must be identical) as brute force does under [`Strictness::Arbitrated`]; returns the tolerated count.
-    #[track_caller]
-    fn assert_agrees(&self, what: &str, accel: &TinyBvh) -> usize {
-        let n = self.rays.len();
-        let mut hits = vec![PrimaryHits::MISS; n];
-        accel.intersect_batch(&self.rays, &mut hits, &mut NoCounters);
-        let mut occluded = vec![false; n];
-        accel.occluded_batch(&self.rays, &mut occluded, &mut NoCounters);
-        let (mut bad, mut tolerated) = (Vec::new(), 0);
-        for (i, ray) in self.rays.iter().enumerate() {
-            let closest = accel.intersect(ray, &mut NoCounters);
-            let occludes = accel.occluded(ray, &mut NoCounters);
-            assert_eq!(Answer::closest(hits[i]), Answer::Closest(closest), "{what}: batch vs single, ray {i}");
-            assert_eq!(occluded[i], occludes, "{what}: batch vs single occlusion, ray {i}");
-            if let Some(h) = closest {
-                assert!((h.prim as usize) < self.triangles.len(), "{what}: ray {i} hit {h:?}");
-            }
-            let want_occluded = self.closest[i].is_some();
-            for (want, got) in [
-                (Answer::Closest(self.closest[i]), Answer::Closest(closest)),
-                (Answer::Occluded(want_occluded), Answer::Occluded(occludes)),
-            ] {
-                match check(&self.exact, ray, &want, &got, Strictness::Arbitrated) {
-                    Outcome::Agree => {}
-                    Outcome::Tolerated(_) => tolerated += 1,
-                    Outcome::Mismatch(side) => bad.push(format!("ray {i} {ray:?}: {got:?} vs {want:?} ({side:?})")),
-                }
-            }
-        }
-        assert!(bad.is_empty(), "{what}: {} of {n} rays disagree:\n{}", bad.len(), bad[..bad.len().min(8)].join("\n"));
-        tolerated
+/// Panics unless `accel`'s batches answer every ray as its single-ray queries do.
+#[track_caller]
+fn assert_batches_are_single_rays(what: &str, accel: &TinyBvh, rays: &[Ray]) {
+    let mut hits = vec![PrimaryHits::MISS; rays.len()];
+    accel.intersect_batch(rays, &mut hits, &mut NoCounters);
+    let mut occluded = vec![false; rays.len()];
+    accel.occluded_batch(rays, &mut occluded, &mut NoCounters);
+    for (i, ray) in rays.iter().enumerate() {
+        let closest = accel.intersect(ray, &mut NoCounters);
+        assert_eq!(Answer::closest(hits[i]), Answer::Closest(closest), "{what}: batch vs single, ray {i}");
+        assert_eq!(occluded[i], accel.occluded(ray, &mut NoCounters), "{what}: batch vs single occlusion, ray {i}");
     }
 }
 
 /// Builds every configuration over `mesh` and checks it against brute force on `rays`.
 #[track_caller]
 fn assert_every_configuration_agrees(label: &str, mesh: &Mesh, rays: Vec<Ray>) {
-    let reference = Reference::new(mesh, rays);
+    let reference = triangle_reference(mesh, &rays);
     for (isa, layout, quality) in configurations() {
         let accel = TinyBvh::build_with(mesh, layout, quality, isa).expect("build");
         assert_eq!((accel.isa(), accel.layout(), accel.kernel()), (isa, layout, isa.name()));
         let stats = accel.stats();
         assert!(stats.nodes > 0 && stats.leaves > 0 && stats.bytes > 0, "{label}: {stats:?}");
         let what = format!("{label} {} {layout:?} {quality:?}", isa.name());
-        let tolerated = reference.assert_agrees(&what, &accel);
-        eprintln!("{what}: {} rays, {tolerated} answers tolerated by f64, {stats:?}", reference.rays.len());
+        assert_batches_are_single_rays(&what, &accel, &rays);
+        let tally = reference.assert_agrees(&what, &accel, Strictness::Arbitrated);
+        eprintln!("{what}: {} rays, {} answers tolerated by f64, {stats:?}", rays.len(), tally.tolerated);
     }
 }
 
