@@ -3,7 +3,7 @@
 
 use crate::accel::wide::WidePrimitive;
 use crate::accel::{AccelVisitor, Accelerator, BuiltAccel, Hit, List};
-use crate::agreement::{Answer, BruteForce64, ExactPrimitive, Outcome, Strictness, check, t_tolerance};
+use crate::agreement::{Answer, BruteForce64, ExactPrimitive, Outcome, RayCandidates, Strictness, check, t_tolerance};
 use crate::counters::NoCounters;
 use crate::geometry::{Primitive, Ray, Sphere, Triangle, TrianglePrimitive};
 use crate::render::PrimaryHits;
@@ -18,6 +18,8 @@ pub struct Reference<'a, X: ExactPrimitive = Sphere> {
     closest: Vec<Option<Hit>>,
     occluded: Vec<bool>,
     brute: BruteForce64<X>,
+    /// Per ray, the primitives f64 allows the f32 test to report (computed once, read by every comparison).
+    candidates: Vec<RayCandidates>,
 }
 
 impl<'a> Reference<'a, Sphere> {
@@ -41,7 +43,9 @@ impl<'a, X: ExactPrimitive> Reference<'a, X> {
         let list = List::build(prims);
         let closest = rays.iter().map(|r| list.intersect(r, &mut NoCounters)).collect();
         let occluded = rays.iter().map(|r| list.occluded(r, &mut NoCounters)).collect();
-        Self { rays, closest, occluded, brute: BruteForce64::new(exact) }
+        let brute = BruteForce64::new(exact);
+        let candidates = brute.candidates(rays);
+        Self { rays, closest, occluded, brute, candidates }
     }
 
     /// Starts comparing answers to these rays; `what` names the backend in the failure message.
@@ -137,17 +141,16 @@ impl<X: ExactPrimitive> Comparison<'_, '_, X> {
             Answer::Closest(_) => Answer::Closest(reference.closest[i]),
             Answer::Occluded(_) => Answer::Occluded(reference.occluded[i]),
         };
-        let text = format!("ray {i} {ray:?}: {got:?} vs brute force {want:?}");
+        let text = || format!("ray {i} {ray:?}: {got:?} vs brute force {want:?}");
         match check(&reference.brute, ray, &want, &got, self.strictness) {
             Outcome::Agree => {}
-            Outcome::Tolerated(why) => self.excused.push(format!("{text} ({why:?})")),
-            Outcome::Mismatch(side) => self.bad.push(format!("{text} (wrong: {side:?})")),
+            Outcome::Tolerated(why) => self.excused.push(format!("{} ({why:?})", text())),
+            Outcome::Mismatch(side) => self.bad.push(format!("{} (wrong: {side:?})", text())),
         }
         if let Answer::Closest(Some(hit)) = got {
-            let candidates = reference.brute.candidates_of(ray);
-            let named = candidates.get(hit.prim).map(|c| c.exact.outcomes);
+            let named = reference.candidates[i].get(hit.prim).map(|c| c.exact.outcomes);
             if !named.is_some_and(|o| o.may_report(hit.t as f64, t_tolerance(ray, hit.t) as f64)) {
-                self.bad.push(format!("{text} (primitive {} cannot be hit at t = {})", hit.prim, hit.t));
+                self.bad.push(format!("{} (primitive {} cannot be hit at t = {})", text(), hit.prim, hit.t));
             }
         }
     }

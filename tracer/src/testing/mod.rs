@@ -19,7 +19,7 @@ mod rays;
 
 pub use agree::{Comparison, Reference, Tally, assert_every_tree_agrees, assert_every_tree_agrees_on_triangles};
 pub use meshes::{TestMesh, mesh_ray_mix, test_meshes};
-pub use rays::{scene_ray_mix, sphere_ray_mix};
+pub use rays::{scene_ray_mix, secondary_rays, sphere_ray_mix};
 
 use crate::accel::wide::{ChildOrdering, Kernel};
 use crate::accel::{AccelKind, AccelParams, BvhParams, Split, Traversal, WideParams};

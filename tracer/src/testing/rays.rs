@@ -9,7 +9,7 @@ use crate::counters::NoCounters;
 use crate::geometry::{Aabb, Ray, Sphere};
 use crate::rays::RaySet;
 use crate::rng::SplitMix64;
-use crate::scene::Scene;
+use crate::scene::{PointLight, Scene};
 
 /// `count` rays over `spheres`, cycling through seven families (ray `i` is of family `i % 7`):
 ///
@@ -67,20 +67,37 @@ pub fn scene_ray_mix(scene: &Scene, seed: u64) -> Vec<Ray> {
     }
     let reference = List::build(spheres);
     let primaries: Vec<Ray> = rays[..(camera.width * camera.height) as usize].to_vec();
+    let hit_normal = |ray: &Ray| {
+        let hit = reference.intersect(ray, &mut NoCounters)?;
+        Some((hit.t, spheres[hit.prim as usize].normal_at(ray.at(hit.t))))
+    };
+    rays.extend(secondary_rays(&primaries, &scene.lights, hit_normal, || draw.unit_vector()));
+    rays
+}
+
+/// From every primary ray's hit (`hit_normal`: its `t` and the surface normal there, either side), offset along
+/// the normal like the shader does: a shadow segment to each light and a bounce around the normal (`unit` draws
+/// the random unit vector added to it).
+pub fn secondary_rays(
+    primaries: &[Ray],
+    lights: &[PointLight],
+    mut hit_normal: impl FnMut(&Ray) -> Option<(f32, Vec3)>,
+    mut unit: impl FnMut() -> Vec3,
+) -> Vec<Ray> {
+    let mut rays = Vec::new();
     for ray in primaries {
-        let Some(hit) = reference.intersect(&ray, &mut NoCounters) else { continue };
-        let p = ray.at(hit.t);
-        let mut n = spheres[hit.prim as usize].normal_at(p);
+        let Some((t, mut n)) = hit_normal(ray) else { continue };
+        let p = ray.at(t);
         if n.dot(ray.dir) > 0.0 {
             n = -n;
         }
         let origin = p + n * (1e-4 * p.abs().max_element().max(1.0));
-        for light in &scene.lights {
+        for light in lights {
             let to_light = light.position - origin;
             let distance = to_light.length();
             rays.push(Ray::segment(origin, to_light / distance, distance));
         }
-        rays.push(Ray::new(origin, (n + draw.unit_vector()).normalize_or(n)));
+        rays.push(Ray::new(origin, (n + unit()).normalize_or(n)));
     }
     rays
 }

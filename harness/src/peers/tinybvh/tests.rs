@@ -13,6 +13,7 @@ use tracer::scene::{SceneKind, random_triangles, tessellate};
 
 use super::*;
 use crate::peers::testing::triangle_reference;
+use tracer::testing::secondary_rays;
 
 /// Every (ISA, layout, builder) this CPU runs; fails if the shim is missing on x86-64 Linux.
 fn configurations() -> Vec<(TinyIsa, TinyLayout, TinyQuality)> {
@@ -88,23 +89,13 @@ fn ray_mix(mesh: &Mesh, scene: &tracer::scene::Scene, seed: u64) -> Vec<Ray> {
         }
     }
     let primaries = rays[..(camera.width * camera.height) as usize].to_vec();
-    for ray in primaries {
-        let Some(hit) = brute_closest(&triangles, &ray) else { continue };
-        let p = ray.at(hit.t);
+    let hit_normal = |ray: &Ray| {
+        let hit = brute_closest(&triangles, ray)?;
         let tri = triangles[hit.prim as usize];
-        let mut n = (tri.p[1] - tri.p[0]).cross(tri.p[2] - tri.p[0]).normalize_or(Vec3::Y);
-        if n.dot(ray.dir) > 0.0 {
-            n = -n;
-        }
-        let origin = p + n * (1e-4 * p.abs().max_element().max(1.0));
-        for light in &scene.lights {
-            let to_light = light.position - origin;
-            let distance = to_light.length();
-            rays.push(Ray::segment(origin, to_light / distance, distance));
-        }
-        let v = Vec3::new(rng.range(-1.0, 1.0) as f32, rng.range(-1.0, 1.0) as f32, rng.range(-1.0, 1.0) as f32);
-        rays.push(Ray::new(origin, (n + v).normalize_or(n)));
-    }
+        Some((hit.t, (tri.p[1] - tri.p[0]).cross(tri.p[2] - tri.p[0]).normalize_or(Vec3::Y)))
+    };
+    let unit = || Vec3::new(rng.range(-1.0, 1.0) as f32, rng.range(-1.0, 1.0) as f32, rng.range(-1.0, 1.0) as f32);
+    rays.extend(secondary_rays(&primaries, &scene.lights, hit_normal, unit));
     rays
 }
 
