@@ -71,15 +71,20 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
     let backend = backend::of(settings.accel);
     backend.available(&settings).map_err(|e| Error::Input(format!("--set accel={}: {e}", settings.accel.name())))?;
     let file = scene_file(&settings, args)?;
+    if settings.scene.is_triangles() {
+        let scene = settings.scene.name();
+        return Err(Error::Input(format!("--set scene={scene}: harness render draws sphere scenes only")));
+    }
     let setup = Setup::start(&settings)?;
     let t0 = Instant::now();
     let scene = make_scene(&settings, file.as_ref());
+    let Some(spheres) = scene.spheres() else { unreachable!("sphere scenes only") };
     let scene_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let built = setup.install(|| backend.build(&settings, &scene.spheres, &setup))?;
+    let built = setup.install(|| backend.build(&settings, &scene.geometry(), &setup))?;
     let build_s = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    let output = setup.install(|| built.structure.run(Work::new(&scene, &settings, None)));
+    let output = setup.install(|| built.structure.run(Work::new(Some(spheres), &settings, None)));
     let render_s = t2.elapsed().as_secs_f64();
     let Output::Image(image) = output else { unreachable!("the render workload draws an image") };
 
@@ -92,7 +97,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
     let encode_s = t3.elapsed().as_secs_f64();
 
     let stats = built.structure.stats();
-    say!("scene        {} spheres, fingerprint {:016x}", scene.spheres.len(), scene.fingerprint());
+    say!("scene        {} spheres, fingerprint {:016x}", spheres.spheres.len(), scene.fingerprint());
     say!("settings     {}", describe(&settings));
     say!("backend      {}: kernel {}, {}", backend.name(), built.simd_kernel, built.peer_info);
     say!("strategy     {}", settings.strategy());
@@ -106,7 +111,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
     );
     say!("time         scene {scene_s:.4} s, build {build_s:.4} s, render {render_s:.4} s, encode {encode_s:.4} s");
     if args.count {
-        let (_, c) = setup.install(|| built.structure.run_counted(Work::new(&scene, &settings, None)));
+        let (_, c) = setup.install(|| built.structure.run_counted(Work::new(Some(spheres), &settings, None)));
         let (nodes, boxes, prims) = c.per_ray();
         say!("rays         {} ({:.2} Mrays/s)", c.rays, c.rays as f64 / render_s / 1e6);
         say!("per ray      {nodes:.2} nodes, {boxes:.2} box tests, {prims:.2} sphere tests (peers count none)");

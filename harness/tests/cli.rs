@@ -75,7 +75,7 @@ fn bad_configs_exit_2_with_one_line_and_write_nothing() {
         (
             "unknown accelerator",
             "name = \"t\"\n[sweep]\naccel = [\"bvh\", \"bhv\"]\n",
-            "sweep.accel[1]: unknown value \"bhv\" (allowed: list, bvh, flat-bvh, wide-bvh, obvhs-bvh2, obvhs-cwbvh, embree, embree-packets, null)",
+            "sweep.accel[1]: unknown value \"bhv\" (allowed: list, bvh, flat-bvh, wide-bvh, obvhs-bvh2, obvhs-cwbvh, embree, embree-packets, tinybvh, null)",
         ),
         (
             "zero threads",
@@ -129,6 +129,36 @@ fn bad_configs_exit_2_with_one_line_and_write_nothing() {
             "order: unknown value \"random\" (allowed: interleaved, sequential, shuffled)",
         ),
         ("invalid toml", "name = \"t\n", "line 1: invalid TOML"),
+        (
+            "bad mesh name",
+            "name = \"t\"\n[sweep]\nscene = \"mesh\"\nmesh = \"bunnny\"\nworkload = \"primary\"\n",
+            "mesh: unknown data set \"bunnny\" (allowed: bunny,",
+        ),
+        (
+            "missing mesh file",
+            "name = \"t\"\n[sweep]\nscene = \"mesh\"\nmesh = \"absent.obj\"\nworkload = \"primary\"\n",
+            "mesh: absent.obj: no such mesh file (allowed: a data set name or an .obj/.ply path)",
+        ),
+        (
+            "mesh scene without a mesh",
+            "name = \"t\"\n[sweep]\nscene = \"mesh\"\nworkload = \"primary\"\n",
+            "mesh: missing (scene \"mesh\" needs a data set name or an .obj/.ply path)",
+        ),
+        (
+            "bad triangle test",
+            "name = \"t\"\n[sweep]\nscene = \"tessellated-spheres\"\ntriangle_test = \"moller\"\n",
+            "sweep.triangle_test[0]: unknown value \"moller\" (allowed: moller-trumbore, watertight)",
+        ),
+        (
+            "bad view",
+            "name = \"t\"\n[sweep]\nscene = \"random-triangles\"\nview = \"top\"\n",
+            "sweep.view[0]: unknown value \"top\" (allowed: overview, street)",
+        ),
+        (
+            "bad tinybvh layout",
+            "name = \"t\"\n[sweep]\naccel = \"tinybvh\"\ntinybvh_layout = \"bvh2\"\n",
+            "sweep.tinybvh_layout[0]: unknown value \"bvh2\" (allowed: bvh, bvh4-cpu, bvh8-cpu)",
+        ),
     ];
     std::fs::write(dir.join("bad.csv"), "0,0,0,-1\n").unwrap();
     for (what, text, expected) in cases {
@@ -148,6 +178,20 @@ fn bad_configs_exit_2_with_one_line_and_write_nothing() {
             assert!(!out_dir.exists(), "{what}: nothing written");
         }
     }
+    // A data set that is not fetched: one line naming the fetch command, nothing written.
+    let cfg = dir.join("unfetched.toml");
+    std::fs::write(&cfg, "name = \"t\"\n[sweep]\nscene = \"mesh\"\nmesh = \"teapot\"\nworkload = \"primary\"\n")
+        .unwrap();
+    let out_dir = dir.join("out");
+    let o = harness()
+        .env("BVHLAB_DATA", dir.join("empty-cache"))
+        .args(["run", cfg.to_str().unwrap(), "--out", out_dir.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert_eq!((o.status.code(), err.trim_end().lines().count()), (Some(2), 1), "{err}");
+    assert!(err.contains("unfetched.toml: mesh: ") && err.contains("harness fetch teapot"), "{err}");
+    assert!(!out_dir.exists(), "nothing written");
     let o = harness().args(["run", dir.join("missing.toml").to_str().unwrap()]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("missing.toml: cannot read"), "{}", stderr(&o));
@@ -722,4 +766,23 @@ fn render_takes_schema_settings_and_refuses_bad_ones() {
         assert!(stderr(&o).contains(want), "{set}: expected {want:?} in {}", stderr(&o));
         assert!(!dir.join("bad.png").exists(), "{set}: nothing written");
     }
+}
+
+/// `experiments/meshes.toml --quick`: procedural triangle scenes, every backend this machine has (Embree's single
+/// rays and packets, obvhs, tinybvh, ours with both triangle tests), every ray kind, each validated exact.
+#[test]
+fn quick_meshes_experiment_validates_every_configuration() {
+    let dir = temp("meshes");
+    let out = dir.join("out");
+    let o =
+        harness().args(["run", "--quick", "experiments/meshes.toml", "--out", out.to_str().unwrap()]).output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let rows = schema::row::read_rows(&std::fs::read_to_string(out.join("runs.csv")).unwrap()).unwrap();
+    assert!(rows.len() >= 2 * 2 * 4 * 5, "{}", rows.len());
+    for r in &rows {
+        assert_eq!((r.validation, r.mismatches), (schema::ValidationStatus::Exact, 0), "{r:?}");
+        assert!(r.scene.is_triangles() && r.rays > 0, "{r:?}");
+    }
+    let scenes: std::collections::HashSet<_> = rows.iter().map(|r| r.scene_fingerprint.clone()).collect();
+    assert_eq!(scenes.len(), 2, "one fingerprint per scene");
 }

@@ -5,11 +5,12 @@ use tracer::accel::bvh::SahCosts;
 use tracer::accel::wide::{ChildOrdering, Kernel};
 use tracer::accel::{AccelKind, AccelParams, BvhParams, Split, Traversal, WideParams};
 use tracer::executor::{Strategy, StrategyKind};
-use tracer::scene::SceneKind;
+use tracer::geometry::TriangleTest;
+use tracer::scene::{SceneKind, View};
 
 use crate::names::{
-    Accel, EmbreeIsa, EmbreePacket, EmbreeQuality, LeafBlock, NodeWidth, ObvhsQuality, Packet, PeerKind, SceneName,
-    Threads, ValidationStatus, Workload, WrongSide,
+    Accel, EmbreeIsa, EmbreePacket, EmbreeQuality, LeafBlock, MeshSource, NodeWidth, ObvhsQuality, Packet, PeerKind,
+    SceneName, Threads, TinyBvhLayout, TinyBvhQuality, ValidationStatus, Workload, WrongSide,
 };
 use crate::row::Cell;
 
@@ -25,10 +26,12 @@ declare_columns! {
         repetition: u32;
     }
     settings {
-        /// Scene generator, or `sphere-file` (then objects and seed come from the file).
+        /// Scene generator, or `sphere-file` (then objects and seed come from the file); triangle scenes:
+        /// `tessellated-spheres` (the random-spheres scene, each sphere a UV sphere of 16 slices and 8 rings),
+        /// `random-triangles`, or `mesh` (the data set or file named by `mesh`).
         scene: SceneName = SceneName::Generated(SceneKind::RandomSpheres);
-        /// Number of spheres.
-        objects: u64 = 1000, range(0, 10_000_000), unit "spheres";
+        /// Number of spheres (tessellated for `tessellated-spheres`; triangles for `random-triangles`).
+        objects: u64 = 1000, range(0, 10_000_000), applies not_mesh_scene else 0, unit "spheres";
         /// Scene seed (0 for sphere files).
         seed: u64 = 1, range(0, i64::MAX), applies generated_scene else 0;
         /// Acceleration structure: the tracer's or a peer's.
@@ -87,6 +90,19 @@ declare_columns! {
         /// before this column had it in `packet_size`.
         embree_packet: Option<EmbreePacket> = Some(EmbreePacket(16)), applies embree_packet_ray_set else None,
             added 6, unit "rays";
+        /// The triangle mesh of `scene = "mesh"`: a data set name (`harness fetch NAME`) or an `.obj` or `.ply` file
+        /// or folder of `.ply` files.
+        mesh: Option<MeshSource> = None, applies mesh_scene else None, added 7;
+        /// Ray–triangle test of the tracer's structures on triangle scenes (peers run their own).
+        triangle_test: Option<TriangleTest> = Some(TriangleTest::Watertight), applies ours_on_triangles else None,
+            added 7;
+        /// Camera of triangle scenes, computed from the mesh's bounds: `overview` (from outside, the whole model in
+        /// frame) or `street` (low inside the model's box, looking along the ground; for cities).
+        view: Option<View> = Some(View::Overview), applies triangle_scene else None, added 7;
+        /// tinybvh's layout: `bvh` (binary), `bvh4-cpu` or `bvh8-cpu` (wide).
+        tinybvh_layout: Option<TinyBvhLayout> = Some(TinyBvhLayout::Bvh), applies tinybvh else None, added 7;
+        /// tinybvh's builder: `default` (binned SAH) or `high` (spatial splits).
+        tinybvh_build: Option<TinyBvhQuality> = Some(TinyBvhQuality::Default), applies tinybvh else None, added 7;
     }
     measures {
         /// Wall time of the backend's one-time start-up in the process that times the configuration: thread pool,
@@ -213,9 +229,34 @@ declare_columns! {
 /// that [`crate::applicability`] enumerates only these.
 pub const APPLICABILITY_INPUTS: &[Axis] = &[Axis::scene, Axis::accel, Axis::split, Axis::strategy, Axis::workload];
 
-/// Generated scenes have a seed; sphere files do not.
+/// Generated scenes have a seed; sphere files and meshes do not.
 fn generated_scene(s: &Settings) -> bool {
-    s.scene != SceneName::SphereFile
+    !matches!(s.scene, SceneName::SphereFile | SceneName::Mesh)
+}
+
+/// A mesh's size is its own.
+fn not_mesh_scene(s: &Settings) -> bool {
+    s.scene != SceneName::Mesh
+}
+
+/// Only `scene = "mesh"` names a mesh.
+fn mesh_scene(s: &Settings) -> bool {
+    s.scene == SceneName::Mesh
+}
+
+/// Scenes of triangles have views.
+fn triangle_scene(s: &Settings) -> bool {
+    s.scene.is_triangles()
+}
+
+/// The tracer's structures choose their triangle test.
+fn ours_on_triangles(s: &Settings) -> bool {
+    triangle_scene(s) && s.accel.peer().is_none()
+}
+
+/// tinybvh's settings.
+fn tinybvh(s: &Settings) -> bool {
+    s.accel == Accel::Peer(PeerKind::TinyBvh)
 }
 
 /// The tracer's trees have tree settings.

@@ -22,9 +22,10 @@ pub mod rows_md;
 pub mod value;
 
 pub use columns::{Axis, AxisValue, Row, Settings, column};
+pub use names::MeshSource;
 pub use names::{
     Accel, EmbreeIsa, EmbreePacket, EmbreeQuality, LeafBlock, Named, NodeWidth, ObvhsQuality, Packet, PeerKind,
-    SceneName, Threads, ValidationStatus, Workload, WrongSide,
+    SceneName, Threads, TinyBvhLayout, TinyBvhQuality, ValidationStatus, Workload, WrongSide,
 };
 pub use row::{Cell, Column, Kind, Role};
 pub use value::{AxisType, Raw};

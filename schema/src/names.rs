@@ -7,8 +7,9 @@ use serde::{Deserialize, Serialize};
 use tracer::accel::wide::{ChildOrdering, Kernel, WideParams};
 use tracer::accel::{AccelKind, Split, Traversal};
 use tracer::executor::StrategyKind;
+use tracer::geometry::TriangleTest;
 use tracer::rays::RayKind;
-use tracer::scene::SceneKind;
+use tracer::scene::{SceneKind, View};
 
 /// An enum of named choices.
 pub trait Named: Copy + Eq + fmt::Debug + Send + Sync + 'static {
@@ -38,7 +39,18 @@ macro_rules! named_by_inherent {
     )*};
 }
 
-named_by_inherent!(AccelKind, Split, Traversal, StrategyKind, SceneKind, RayKind, Kernel, ChildOrdering);
+named_by_inherent!(
+    AccelKind,
+    Split,
+    Traversal,
+    StrategyKind,
+    SceneKind,
+    RayKind,
+    Kernel,
+    ChildOrdering,
+    TriangleTest,
+    View
+);
 
 /// Declares a kebab-case enum with its names, `ALL`, `Display` and `Named`.
 macro_rules! named_enum {
@@ -75,6 +87,8 @@ named_enum! {
         Embree = "embree",
         /// Embree 4 queried in packets of 16 rays (`rtcIntersect16`) or 8 (`rtcIntersect8`), by `embree_packet`.
         EmbreePackets = "embree-packets",
+        /// tinybvh 1.6.8 through the harness's own shim (triangle scenes only), layout by `tinybvh_layout`.
+        TinyBvh = "tinybvh",
         /// Not a peer: every ray misses at once, so its trace time is the harness's own cost per ray (never validated).
         Null = "null",
     }
@@ -317,13 +331,30 @@ impl Packet {
     }
 }
 
-/// Where a configuration's spheres come from.
+/// Where a configuration's primitives come from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SceneName {
-    /// One of the tracer's generators.
+    /// One of the tracer's sphere generators.
     Generated(SceneKind),
     /// The experiment's sphere file (`sweep.sphere_file`).
     SphereFile,
+    /// The random-spheres scene of `objects` spheres, each tessellated into a closed UV sphere of
+    /// [`SceneName::SEGMENTS`] slices.
+    TessellatedSpheres,
+    /// `objects` random triangles in the random-spheres scene's box.
+    RandomTriangles,
+    /// The triangle mesh named by the `mesh` setting.
+    Mesh,
+}
+
+impl SceneName {
+    /// Slices (and twice the rings) of each tessellated sphere: 16 slices and 8 rings, 224 triangles a sphere.
+    pub const SEGMENTS: u32 = 16;
+
+    /// True for the scenes of triangles.
+    pub fn is_triangles(self) -> bool {
+        matches!(self, SceneName::TessellatedSpheres | SceneName::RandomTriangles | SceneName::Mesh)
+    }
 }
 
 impl Named for SceneName {
@@ -331,13 +362,47 @@ impl Named for SceneName {
         SceneName::Generated(SceneKind::RandomSpheres),
         SceneName::Generated(SceneKind::ClusteredSpheres),
         SceneName::SphereFile,
+        SceneName::TessellatedSpheres,
+        SceneName::RandomTriangles,
+        SceneName::Mesh,
     ];
     fn name(self) -> &'static str {
         match self {
             SceneName::Generated(k) => k.name(),
             SceneName::SphereFile => "sphere-file",
+            SceneName::TessellatedSpheres => "tessellated-spheres",
+            SceneName::RandomTriangles => "random-triangles",
+            SceneName::Mesh => "mesh",
         }
     }
+}
+
+/// The `mesh` setting: a data set name (`harness fetch NAME`) or a path to an `.obj` or `.ply` file or a folder of
+/// `.ply` files (relative to where the harness runs).
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct MeshSource(pub String);
+
+impl fmt::Display for MeshSource {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+named_enum! {
+    /// tinybvh's layouts (`tinybvh_layout`).
+    TinyBvhLayout {
+        /// `BVH`: the binary tree.
+        Bvh = "bvh",
+        /// `BVH4_CPU`: 4-wide nodes (SSE).
+        Bvh4Cpu = "bvh4-cpu",
+        /// `BVH8_CPU`: 8-wide nodes (AVX2).
+        Bvh8Cpu = "bvh8-cpu",
+    }
+}
+
+named_enum! {
+    /// tinybvh's builders (`tinybvh_build`): `default` (`Build`, binned SAH) or `high` (`BuildHQ`, spatial splits).
+    TinyBvhQuality { Default = "default", High = "high", }
 }
 
 /// What a run computes.
@@ -355,6 +420,7 @@ impl Named for Workload {
         Workload::Rays(RayKind::Primary),
         Workload::Rays(RayKind::Shadow),
         Workload::Rays(RayKind::Diffuse),
+        Workload::Rays(RayKind::AmbientOcclusion),
     ];
     fn name(self) -> &'static str {
         match self {
@@ -439,6 +505,10 @@ mod tests {
         round_trip::<Kernel>();
         round_trip::<ChildOrdering>();
         round_trip::<Packet>();
+        round_trip::<TriangleTest>();
+        round_trip::<View>();
+        round_trip::<TinyBvhLayout>();
+        round_trip::<TinyBvhQuality>();
         assert_eq!(Accel::ALL.len(), AccelKind::ALL.len() + PeerKind::ALL.len());
         assert!(PeerKind::from_name("embree4").is_none());
     }

@@ -2,7 +2,7 @@
 
 use std::fmt::Debug;
 
-use crate::names::{EmbreePacket, LeafBlock, Named, NodeWidth, Threads};
+use crate::names::{EmbreePacket, LeafBlock, MeshSource, Named, NodeWidth, Threads};
 use crate::row::{Cell, Kind};
 
 /// A config value as TOML (or the command line) gives it.
@@ -188,6 +188,25 @@ impl AxisType for Threads {
             Threads::All => None,
             Threads::Count(n) => Some(f64::from(*n)),
         }
+    }
+}
+
+impl AxisType for MeshSource {
+    const KIND: Kind = Kind::Text;
+    fn parse(raw: Raw<'_>) -> Result<Self, String> {
+        match raw {
+            Raw::Str(s) if !s.is_empty() && s != "-" && !s.contains([',', '"', '\n']) => Ok(MeshSource(s.to_string())),
+            other => Err(format!("expected a data set name or a mesh path, found {}", other.what())),
+        }
+    }
+    fn allowed(_: &str) -> String {
+        "a data set name (harness fetch --list) or an .obj/.ply path".into()
+    }
+    fn cell(&self) -> Cell {
+        Cell::Text(self.0.clone())
+    }
+    fn from_text(text: &str) -> Result<Self, String> {
+        Self::parse(Raw::Str(text))
     }
 }
 

@@ -3,6 +3,11 @@
 //! - `primary`: one camera ray per pixel, closest hit.
 //! - `shadow`: from each primary hit point toward the scene's first light, any hit (segments).
 //! - `diffuse`: one cosine-distributed bounce from each primary hit point, closest hit (incoherent).
+//! - `ambient-occlusion`: one cosine-distributed segment from each primary hit point, any hit, of length
+//!   [`AO_LENGTH`] (1/20) of the diagonal of the scene's bounding box.
+//!
+//! Sets are made over any [`Primitive`] ([`RaySet::generate_over`]); sphere scenes keep their own normals
+//! ([`RaySet::generate`], `Sphere::normal_at`), so their rays are what they always were.
 //!
 //! Hit points come from a reference accelerator's primary hits (every structure agrees with brute force),
 //! and directions are sampled with [`SplitMix64`] using only `+ − × ÷` and `sqrt`, so a ray set is the same
@@ -16,10 +21,10 @@ use crate::accel::{Accelerator, Hit};
 use crate::counters::Counters;
 use crate::executor::Strategy;
 use crate::fingerprint::Fnv64;
-use crate::geometry::Ray;
+use crate::geometry::{Aabb, Primitive, Ray};
 use crate::render::PrimaryHits;
 use crate::rng::SplitMix64;
-use crate::scene::Scene;
+use crate::scene::{Camera, Scene};
 
 /// Which ray set.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -31,11 +36,16 @@ pub enum RayKind {
     Shadow,
     /// Cosine-distributed bounces from primary hit points, closest hit.
     Diffuse,
+    /// Cosine-distributed segments of [`AO_LENGTH`] of the scene's diagonal from primary hit points, any hit.
+    AmbientOcclusion,
 }
 
+/// Length of ambient-occlusion rays as a fraction of the diagonal of the scene's bounding box: 1/20.
+pub const AO_LENGTH: f32 = 0.05;
+
 impl RayKind {
-    /// All three.
-    pub const ALL: [RayKind; 3] = [RayKind::Primary, RayKind::Shadow, RayKind::Diffuse];
+    /// Every kind.
+    pub const ALL: [RayKind; 4] = [RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, RayKind::AmbientOcclusion];
 
     /// The kebab-case name used in configs.
     pub fn name(self) -> &'static str {
@@ -43,12 +53,13 @@ impl RayKind {
             RayKind::Primary => "primary",
             RayKind::Shadow => "shadow",
             RayKind::Diffuse => "diffuse",
+            RayKind::AmbientOcclusion => "ambient-occlusion",
         }
     }
 
     /// True for any-hit (occlusion) queries.
     pub fn is_occlusion(self) -> bool {
-        self == RayKind::Shadow
+        matches!(self, RayKind::Shadow | RayKind::AmbientOcclusion)
     }
 }
 
@@ -122,7 +133,11 @@ impl RaySet {
     /// So 8, 16 and 64 consecutive rays of a full tile are a row, two rows and the whole tile: coherent packets
     /// for every backend that traces rays in packets, and the wide BVH's tile packets ([`crate::accel::wide::tile`]).
     pub fn primary(scene: &Scene) -> Self {
-        let cam = scene.camera;
+        Self::primary_of(&scene.camera)
+    }
+
+    /// [`RaySet::primary`] of any camera.
+    pub fn primary_of(cam: &Camera) -> Self {
         let rays = cam.rays();
         let rays = Self::tile_order(cam.width, cam.height).map(|(x, y)| rays.ray(x, y)).collect();
         RaySet { kind: RayKind::Primary, rays }
@@ -142,8 +157,9 @@ impl RaySet {
         })
     }
 
-    /// Hit points and outward normals (facing the ray) of the primary rays that hit, in their order.
-    fn surface_points(scene: &Scene, primary: &RaySet, hits: &[Hit]) -> Vec<(Vec3, Vec3)> {
+    /// Hit points and normals (facing the ray, from `normal(prim, point, ray direction)`) of the primary rays
+    /// that hit, in their order; each point is lifted off the surface along its normal.
+    fn surface_points(primary: &RaySet, hits: &[Hit], normal: impl Fn(u32, Vec3, Vec3) -> Vec3) -> Vec<(Vec3, Vec3)> {
         primary
             .rays
             .iter()
@@ -151,21 +167,20 @@ impl RaySet {
             .filter(|(_, h)| h.prim != PrimaryHits::MISS.prim)
             .map(|(r, h)| {
                 let p = r.at(h.t);
-                let n = scene.spheres[h.prim as usize].normal_at(p);
-                let n = if n.dot(r.dir) > 0.0 { -n } else { n };
+                let n = normal(h.prim, p, r.dir);
                 (p + n * (1e-4 * p.abs().max_element().max(1.0)), n)
             })
             .collect()
     }
 
-    /// From every primary hit point toward the first light (segments ending at the light); empty without lights.
-    pub fn shadow(scene: &Scene, primary: &RaySet, hits: &[Hit]) -> Self {
-        let rays = match scene.lights.first() {
+    /// From every surface point toward `light` (segments ending at the light); empty without a light.
+    fn shadow(points: Vec<(Vec3, Vec3)>, light: Option<Vec3>) -> Self {
+        let rays = match light {
             None => vec![],
-            Some(light) => Self::surface_points(scene, primary, hits)
+            Some(light) => points
                 .into_iter()
                 .map(|(o, _)| {
-                    let to = light.position - o;
+                    let to = light - o;
                     let d = to.length();
                     Ray::segment(o, to / d.max(f32::MIN_POSITIVE), d)
                 })
@@ -174,19 +189,31 @@ impl RaySet {
         RaySet { kind: RayKind::Shadow, rays }
     }
 
-    /// One cosine-distributed bounce from every primary hit point, drawn from `seed`.
-    pub fn diffuse(scene: &Scene, primary: &RaySet, hits: &[Hit], seed: u64) -> Self {
+    /// One cosine-distributed bounce from every surface point, drawn from `seed`.
+    fn diffuse(points: Vec<(Vec3, Vec3)>, seed: u64) -> Self {
         let mut rng = SplitMix64::new(seed);
-        let rays = Self::surface_points(scene, primary, hits)
-            .into_iter()
-            .map(|(o, n)| Ray::new(o, cosine_direction(n, &mut rng)))
-            .collect();
+        let rays = points.into_iter().map(|(o, n)| Ray::new(o, cosine_direction(n, &mut rng))).collect();
         RaySet { kind: RayKind::Diffuse, rays }
     }
 
-    /// The set of `kind` for `scene`, using `reference`'s primary hits for the secondary sets.
-    pub fn generate<A: Accelerator>(kind: RayKind, scene: &Scene, reference: &A, seed: u64) -> Self {
-        let primary = Self::primary(scene);
+    /// One cosine-distributed segment of [`AO_LENGTH`] × the diagonal of `bounds` from every surface point.
+    fn ambient_occlusion(points: Vec<(Vec3, Vec3)>, bounds: Aabb, seed: u64) -> Self {
+        let mut rng = SplitMix64::new(seed);
+        let length = AO_LENGTH * bounds.extent().length();
+        let rays = points.into_iter().map(|(o, n)| Ray::segment(o, cosine_direction(n, &mut rng), length)).collect();
+        RaySet { kind: RayKind::AmbientOcclusion, rays }
+    }
+
+    /// The secondary set of `kind` from `primary` and `reference`'s hits on it.
+    fn secondary<A: Accelerator>(
+        kind: RayKind,
+        primary: RaySet,
+        reference: &A,
+        light: Option<Vec3>,
+        bounds: impl FnOnce() -> Aabb,
+        normal: impl Fn(u32, Vec3, Vec3) -> Vec3,
+        seed: u64,
+    ) -> Self {
         if kind == RayKind::Primary {
             return primary;
         }
@@ -194,10 +221,39 @@ impl RaySet {
             RayAnswers::Closest(h) => h,
             RayAnswers::Occluded(_) => unreachable!("primary rays ask for closest hits"),
         };
+        let points = Self::surface_points(&primary, &hits, normal);
         match kind {
-            RayKind::Shadow => Self::shadow(scene, &primary, &hits),
-            _ => Self::diffuse(scene, &primary, &hits, seed),
+            RayKind::Primary => unreachable!(),
+            RayKind::Shadow => Self::shadow(points, light),
+            RayKind::Diffuse => Self::diffuse(points, seed),
+            RayKind::AmbientOcclusion => Self::ambient_occlusion(points, bounds(), seed),
         }
+    }
+
+    /// The set of `kind` for a sphere scene, using `reference`'s primary hits for the secondary sets (the
+    /// spheres' normals `Sphere::normal_at`, turned to face the ray; shadow rays go to the first light).
+    pub fn generate<A: Accelerator>(kind: RayKind, scene: &Scene, reference: &A, seed: u64) -> Self {
+        let normal = |prim: u32, p: Vec3, dir: Vec3| {
+            let n = scene.spheres[prim as usize].normal_at(p);
+            if n.dot(dir) > 0.0 { -n } else { n }
+        };
+        let light = scene.lights.first().map(|l| l.position);
+        Self::secondary(kind, Self::primary(scene), reference, light, || scene.bounds(), normal, seed)
+    }
+
+    /// The set of `kind` over any primitives `prims` seen by `camera`, shadow rays toward `light`, using
+    /// `reference`'s (built over `prims`) primary hits; normals from [`Primitive::normal`].
+    pub fn generate_over<P: Primitive, A: Accelerator>(
+        kind: RayKind,
+        camera: &Camera,
+        light: Vec3,
+        prims: &[P],
+        reference: &A,
+        seed: u64,
+    ) -> Self {
+        let normal = |prim: u32, p: Vec3, dir: Vec3| prims[prim as usize].normal(p, -dir);
+        let bounds = || prims.iter().fold(Aabb::EMPTY, |b, p| b.union(&p.bounds()));
+        Self::secondary(kind, Self::primary_of(camera), reference, Some(light), bounds, normal, seed)
     }
 }
 

@@ -6,12 +6,13 @@ use std::sync::OnceLock;
 use schema::{Accel, EmbreePacket, PeerKind, Settings};
 use tracer::accel::{Accelerator, Hit, TreeStats};
 use tracer::counters::Counters;
-use tracer::geometry::{Ray, Sphere};
+use tracer::geometry::Ray;
 use tracer::render::PrimaryHits;
 
-use super::{Backend, Built, Setup, Unavailable};
+use super::{Backend, Built, Geometry, Setup, Unavailable};
 use crate::error::Error;
-use crate::peers::{EmbreeConfig, EmbreeDevice, EmbreeSpheres};
+use crate::peers::embree::{EmbreeGeometry, EmbreeScene};
+use crate::peers::{EmbreeConfig, EmbreeDevice, EmbreeSpheres, EmbreeTriangles};
 
 /// Embree 4, when a library is found.
 pub struct Embree;
@@ -48,10 +49,20 @@ impl Backend for Embree {
     }
 
     /// Builds on Embree's device (its TBB threads).
-    fn build(&self, settings: &Settings, spheres: &[Sphere], setup: &Setup) -> Result<Built, Error> {
+    fn build(&self, settings: &Settings, geometry: &Geometry<'_>, setup: &Setup) -> Result<Built, Error> {
         let device: &EmbreeDevice = setup.started().expect("Embree's setup starts a device");
         let quality = settings.embree_build.unwrap_or_default();
-        let scene = EmbreeSpheres::build(device, spheres, quality).map_err(|e| Error::Run(format!("embree: {e}")))?;
+        let failed = |e| Error::Run(format!("embree: {e}"));
+        match *geometry {
+            Geometry::Spheres(s) => built(settings, EmbreeSpheres::build(device, s, quality).map_err(failed)?),
+            Geometry::Triangles(m) => built(settings, EmbreeTriangles::build(device, m, quality).map_err(failed)?),
+        }
+    }
+}
+
+/// The row of a built Embree scene: single rays or packets.
+fn built<G: EmbreeGeometry + 'static>(settings: &Settings, scene: EmbreeScene<G>) -> Result<Built, Error> {
+    {
         let i = scene.device_info();
         let isa = match i.native_packet {
             16 => "avx512",
@@ -70,8 +81,8 @@ impl Backend for Embree {
 
 /// Embree queried in packets for closest hits, `rtcIntersect8` or `rtcIntersect16` (`embree_packet`); occlusion stays
 /// `rtcOccluded1`.
-pub struct EmbreePackets {
-    pub scene: EmbreeSpheres,
+pub struct EmbreePackets<G: EmbreeGeometry> {
+    pub scene: EmbreeScene<G>,
     pub width: EmbreePacketWidth,
 }
 
@@ -94,12 +105,12 @@ impl EmbreePacketWidth {
     }
 }
 
-impl EmbreePackets {
+impl<G: EmbreeGeometry> EmbreePackets<G> {
     /// Traces `rays` in packets of N with `query` (one of the scene's `intersectN`), no allocation.
     #[inline(always)]
     fn batch<const N: usize, C: Counters>(
         &self,
-        query: impl Fn(&EmbreeSpheres, &[Ray]) -> [Option<Hit>; N],
+        query: impl Fn(&EmbreeScene<G>, &[Ray]) -> [Option<Hit>; N],
         rays: &[Ray],
         out: &mut [Hit],
         counters: &mut C,
@@ -114,7 +125,7 @@ impl EmbreePackets {
     }
 }
 
-impl Accelerator for EmbreePackets {
+impl<G: EmbreeGeometry> Accelerator for EmbreePackets<G> {
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
         self.scene.intersect(ray, counters)
     }
@@ -130,8 +141,8 @@ impl Accelerator for EmbreePackets {
     fn intersect_batch<C: Counters>(&self, rays: &[Ray], out: &mut [Hit], counters: &mut C) {
         // The width is chosen once per batch; each arm is its own monomorphized loop.
         match self.width {
-            EmbreePacketWidth::Eight => self.batch(EmbreeSpheres::intersect8, rays, out, counters),
-            EmbreePacketWidth::Sixteen => self.batch(EmbreeSpheres::intersect16, rays, out, counters),
+            EmbreePacketWidth::Eight => self.batch(EmbreeScene::<G>::intersect8, rays, out, counters),
+            EmbreePacketWidth::Sixteen => self.batch(EmbreeScene::<G>::intersect16, rays, out, counters),
         }
     }
 }

@@ -1,12 +1,10 @@
 //! The null backend: every ray misses at once ([`tracer::accel::Null`]), so a series of it times the harness's own
 //! path per ray — the same ray set, executor, batch loop and answer writes as every backend, and nothing else.
 
+use super::{Backend, Built, Geometry, Setup, Unavailable};
+use crate::error::Error;
 use schema::{Accel, PeerKind, Settings};
 use tracer::accel::Null;
-use tracer::geometry::Sphere;
-
-use super::{Backend, Built, Setup, Unavailable};
-use crate::error::Error;
 
 /// The harness's own cost.
 pub struct NullBackend;
@@ -28,7 +26,7 @@ impl Backend for NullBackend {
         false
     }
 
-    fn build(&self, _settings: &Settings, _spheres: &[Sphere], _setup: &Setup) -> Result<Built, Error> {
+    fn build(&self, _settings: &Settings, _geometry: &Geometry<'_>, _setup: &Setup) -> Result<Built, Error> {
         Ok(Built::peer(Null, "-".into()))
     }
 }

@@ -1,11 +1,9 @@
 //! obvhs 0.4's BVH2 and compressed wide BVH8 (bindings in [`crate::peers::obvhs`]).
 
-use schema::{Accel, PeerKind, Settings};
-use tracer::geometry::Sphere;
-
-use super::{Backend, Built, Setup, Unavailable};
+use super::{Backend, Built, Geometry, Setup, Unavailable};
 use crate::error::Error;
 use crate::peers::{ObvhsBvh2, ObvhsCwbvh};
+use schema::{Accel, PeerKind, Settings};
 
 /// obvhs, built into the harness.
 pub struct Obvhs;
@@ -26,11 +24,14 @@ impl Backend for Obvhs {
         Ok(format!("built in ({VERSION})"))
     }
 
-    fn build(&self, settings: &Settings, spheres: &[Sphere], setup: &Setup) -> Result<Built, Error> {
+    fn build(&self, settings: &Settings, geometry: &Geometry<'_>, setup: &Setup) -> Result<Built, Error> {
         let preset = settings.obvhs_build.unwrap_or_default();
-        Ok(setup.install(|| match settings.accel {
-            Accel::Peer(PeerKind::ObvhsCwbvh) => Built::peer(ObvhsCwbvh::build(spheres, preset), VERSION.into()),
-            _ => Built::peer(ObvhsBvh2::build(spheres, preset), VERSION.into()),
+        let cwbvh = settings.accel == Accel::Peer(PeerKind::ObvhsCwbvh);
+        Ok(setup.install(|| match (*geometry, cwbvh) {
+            (Geometry::Spheres(s), true) => Built::peer(ObvhsCwbvh::build(s, preset), VERSION.into()),
+            (Geometry::Spheres(s), false) => Built::peer(ObvhsBvh2::build(s, preset), VERSION.into()),
+            (Geometry::Triangles(m), true) => Built::peer(ObvhsCwbvh::build_mesh(m, preset), VERSION.into()),
+            (Geometry::Triangles(m), false) => Built::peer(ObvhsBvh2::build_mesh(m, preset), VERSION.into()),
         }))
     }
 }

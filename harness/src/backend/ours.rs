@@ -2,10 +2,11 @@
 
 use schema::{Accel, Settings};
 use tracer::accel::wide::Kernel;
-use tracer::accel::{BuiltAccel, WideParams};
-use tracer::geometry::Sphere;
+use tracer::accel::wide::WidePrimitive;
+use tracer::accel::{AccelParams, BuiltAccel, WideParams};
+use tracer::geometry::{MollerTrumboreTriangle, TrianglePrimitive, TriangleTest, WatertightTriangle};
 
-use super::{Backend, Built, Setup, Unavailable};
+use super::{Backend, Built, Geometry, Setup, Unavailable};
 use crate::error::Error;
 
 /// The tracer under study.
@@ -44,9 +45,23 @@ impl Backend for Ours {
         }
     }
 
-    fn build(&self, settings: &Settings, spheres: &[Sphere], setup: &Setup) -> Result<Built, Error> {
-        let accel = setup.install(|| BuiltAccel::build(spheres, &settings.accel_params()));
-        let simd_kernel = accel.kernel_name().unwrap_or("-");
-        Ok(Built { structure: Box::new(accel), peer_info: "-".into(), simd_kernel })
+    /// Chooses the primitive once: spheres, or the mesh's triangles with `triangle_test`; everything after is
+    /// compiled for it.
+    fn build(&self, settings: &Settings, geometry: &Geometry<'_>, setup: &Setup) -> Result<Built, Error> {
+        let params = settings.accel_params();
+        Ok(match *geometry {
+            Geometry::Spheres(spheres) => built(setup, spheres, &params),
+            Geometry::Triangles(mesh) => match settings.triangle_test.unwrap_or(TriangleTest::Watertight) {
+                TriangleTest::MollerTrumbore => built(setup, &MollerTrumboreTriangle::all(mesh.triangles()), &params),
+                TriangleTest::Watertight => built(setup, &WatertightTriangle::all(mesh.triangles()), &params),
+            },
+        })
     }
+}
+
+/// The structure of `params` over `prims`, built in the setup's pool.
+fn built<P: WidePrimitive>(setup: &Setup, prims: &[P], params: &AccelParams) -> Built {
+    let accel = setup.install(|| BuiltAccel::build(prims, params));
+    let simd_kernel = accel.kernel_name().unwrap_or("-");
+    Built { structure: Box::new(accel), peer_info: "-".into(), simd_kernel }
 }

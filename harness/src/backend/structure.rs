@@ -1,6 +1,7 @@
 //! A built backend as the harness traces it: one dynamic call per workload, around a loop monomorphized for the
 //! concrete structure and counters (the hot loop has no dynamic dispatch).
 
+use tracer::accel::wide::WidePrimitive;
 use tracer::accel::{AccelVisitor, Accelerator, BuiltAccel, TreeStats};
 use tracer::counters::{NoCounters, WorkCounters};
 use tracer::executor::Strategy;
@@ -50,7 +51,7 @@ impl<A: Accelerator> Visit for Concrete<A> {
     }
 }
 
-impl Visit for BuiltAccel {
+impl<P: WidePrimitive> Visit for BuiltAccel<P> {
     fn visit<V: AccelVisitor>(&self, visitor: V) -> V::Output {
         BuiltAccel::visit(self, visitor)
     }

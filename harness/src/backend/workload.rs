@@ -28,14 +28,15 @@ impl Output {
 
 /// Runs the workload with counters `C`: its output and the counters.
 pub struct Work<'a, C> {
-    scene: &'a Scene,
+    /// The sphere scene of a render (ray sets need none).
+    scene: Option<&'a Scene>,
     settings: &'a Settings,
     rays: Option<&'a RaySet>,
     _c: std::marker::PhantomData<C>,
 }
 
 impl<'a, C> Work<'a, C> {
-    pub fn new(scene: &'a Scene, settings: &'a Settings, rays: Option<&'a RaySet>) -> Self {
+    pub fn new(scene: Option<&'a Scene>, settings: &'a Settings, rays: Option<&'a RaySet>) -> Self {
         Self { scene, settings, rays, _c: std::marker::PhantomData }
     }
 }
@@ -46,8 +47,9 @@ impl<C: Counters> AccelVisitor for Work<'_, C> {
         let s = self.settings;
         match s.workload {
             Workload::Render => {
+                let scene = self.scene.expect("renders are of sphere scenes");
                 let (image, c) = bvhlab_phase_trace(|| {
-                    render::<_, C>(self.scene, accel, &RenderSettings { max_depth: s.max_depth }, &s.strategy())
+                    render::<_, C>(scene, accel, &RenderSettings { max_depth: s.max_depth }, &s.strategy())
                 });
                 (Output::Image(image), c)
             }

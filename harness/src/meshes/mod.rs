@@ -9,8 +9,11 @@ pub mod registry;
 #[cfg(test)]
 mod tests;
 
+use std::collections::HashMap;
 use std::path::Path;
+use std::sync::{Arc, Mutex};
 
+use tracer::Vec3;
 use tracer::scene::mesh::Mesh;
 
 use crate::error::Error;
@@ -40,6 +43,49 @@ pub fn load_path(path: &Path) -> Result<Mesh, Error> {
             path.display()
         ))),
     }
+}
+
+/// The data sets whose up axis is z (the sionna-rt city scenes, Mitsuba scenes with z up); every other mesh, and
+/// every file, is taken as y up.
+pub const Z_UP: &[&str] = &["san-francisco", "munich", "florence", "etoile"];
+
+/// The up axis of the mesh the `mesh` setting names ([`Z_UP`]).
+pub fn up_axis(source: &str) -> Vec3 {
+    if Z_UP.contains(&source) { Vec3::Z } else { Vec3::Y }
+}
+
+/// True when the `mesh` setting names a file or folder rather than a data set.
+pub fn is_path(source: &str) -> bool {
+    source.contains(['/', '\\']) || source.contains('.')
+}
+
+/// The mesh the `mesh` setting names — the fetched data set `source`, or the file or folder at that path — loaded
+/// once per process.
+pub fn load_source(source: &str) -> Result<Arc<Mesh>, Error> {
+    static LOADED: Mutex<Option<HashMap<String, Arc<Mesh>>>> = Mutex::new(None);
+    if let Some(mesh) = LOADED.lock().unwrap().get_or_insert_with(HashMap::new).get(source) {
+        return Ok(mesh.clone());
+    }
+    let mesh = Arc::new(if is_path(source) {
+        let path = Path::new(source);
+        if !path.exists() {
+            return Err(Error::Input(format!(
+                "{source}: no such mesh file (allowed: a data set name or an .obj/.ply path)"
+            )));
+        }
+        load_path(path)?
+    } else {
+        if DataSet::named(source).is_err() {
+            let names: Vec<_> = registry::DATA_SETS.iter().map(|d| d.name).collect();
+            return Err(Error::Input(format!(
+                "unknown data set {source:?} (allowed: {}, or an .obj/.ply file or a folder of .ply files)",
+                names.join(", ")
+            )));
+        }
+        load(source)?
+    });
+    LOADED.lock().unwrap().get_or_insert_with(HashMap::new).insert(source.to_string(), mesh.clone());
+    Ok(mesh)
 }
 
 /// `mesh` if every index is a vertex of it, else one line naming `path` and the first bad triangle.

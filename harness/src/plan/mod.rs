@@ -159,6 +159,21 @@ impl Plan {
         if configurations.is_empty() {
             return Err(Error::Input(format!("{file}: exclude: every run is excluded (nothing to run)")));
         }
+        // Every mesh is loaded now (once per process), so a bad name or a data set not fetched is bad input
+        // before anything runs.
+        for c in &configurations {
+            match (c.settings.scene, &c.settings.mesh) {
+                (SceneName::Mesh, None) => {
+                    return Err(Error::Input(format!(
+                        "{file}: mesh: missing (scene \"mesh\" needs a data set name or an .obj/.ply path)"
+                    )));
+                }
+                (SceneName::Mesh, Some(m)) => {
+                    crate::meshes::load_source(&m.0).map_err(|e| Error::Input(format!("{file}: mesh: {e}")))?;
+                }
+                _ => {}
+            }
+        }
         let mut notes = Vec::new();
         if !above_cores.is_empty() {
             above_cores.sort_unstable();
@@ -178,7 +193,9 @@ impl Plan {
         let mut skipped: Vec<(Unavailable, Vec<String>)> = Vec::new();
         let mut unavailable = HashSet::new();
         for (i, c) in self.configurations.iter().enumerate() {
-            let Err(why) = backend::of(c.settings.accel).available(&c.settings) else { continue };
+            let available =
+                backend::scene_support(&c.settings).and_then(|_| backend::of(c.settings.accel).available(&c.settings));
+            let Err(why) = available else { continue };
             if why.installable && require_all {
                 return Err(Error::Input(format!("{file}: accel {}: {why}", c.settings.accel.name())));
             }

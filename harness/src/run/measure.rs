@@ -3,15 +3,16 @@
 
 use std::time::Instant;
 
+use schema::SceneName;
 use schema::Settings;
 use serde::{Deserialize, Serialize};
 use tracer::accel::{Null, TreeStats};
 use tracer::counters::{NoCounters, WorkCounters};
 use tracer::rays::{RayAnswers, RaySet, trace};
-use tracer::scene::Scene;
+use tracer::scene::{MeshScene, Scene, SceneKind, random_triangles, tessellate};
 
 use crate::backend::workload::{Output, Work, bvhlab_phase_build};
-use crate::backend::{self, Setup};
+use crate::backend::{self, Geometry, Setup};
 use crate::error::Error;
 
 /// Wall times of one run, and what it produced (a worker process answers with it as JSON).
@@ -69,14 +70,72 @@ impl Timing {
     }
 }
 
-/// The scene of `s` at its image size; `file` holds the spheres of a sphere-file scene.
-pub fn make_scene(s: &Settings, file: Option<&Scene>) -> Scene {
-    let scene = match (s.scene, file) {
-        (schema::SceneName::Generated(kind), _) => kind.generate(s.objects as usize, s.seed),
-        (schema::SceneName::SphereFile, Some(scene)) => Scene::clone(scene),
-        (schema::SceneName::SphereFile, None) => panic!("a sphere-file scene needs its file (read when planning)"),
+/// A configuration's scene: spheres, or a triangle mesh with its view and light.
+#[derive(Clone, Debug)]
+pub enum SceneData {
+    Spheres(Scene),
+    Triangles(MeshScene),
+}
+
+impl SceneData {
+    /// What the structures are built over.
+    pub fn geometry(&self) -> Geometry<'_> {
+        match self {
+            SceneData::Spheres(s) => Geometry::Spheres(&s.spheres),
+            SceneData::Triangles(t) => Geometry::Triangles(&t.mesh),
+        }
+    }
+
+    /// The sphere scene (renders need one).
+    pub fn spheres(&self) -> Option<&Scene> {
+        match self {
+            SceneData::Spheres(s) => Some(s),
+            SceneData::Triangles(_) => None,
+        }
+    }
+
+    /// The scene's fingerprint (a triangle scene's covers its mesh, camera and light).
+    pub fn fingerprint(&self) -> u64 {
+        match self {
+            SceneData::Spheres(s) => s.fingerprint(),
+            SceneData::Triangles(t) => t.fingerprint(),
+        }
+    }
+
+    /// Number of primitives.
+    pub fn primitives(&self) -> usize {
+        match self {
+            SceneData::Spheres(s) => s.spheres.len(),
+            SceneData::Triangles(t) => t.mesh.triangle_count(),
+        }
+    }
+}
+
+/// The scene of `s` at its image size; `file` holds the spheres of a sphere-file scene. A mesh is loaded once per
+/// process (planning loads it first, so a missing data set is bad input before anything runs).
+pub fn make_scene(s: &Settings, file: Option<&Scene>) -> SceneData {
+    let (w, h) = (s.width, s.height);
+    let spheres = |scene: Scene| SceneData::Spheres(Scene { camera: scene.camera.with_resolution(w, h), ..scene });
+    let view = s.view.unwrap_or(tracer::scene::View::Overview);
+    let triangles = |mesh, up| {
+        let scene = MeshScene::new(mesh, view, up);
+        SceneData::Triangles(MeshScene { camera: scene.camera.with_resolution(w, h), ..scene })
     };
-    Scene { camera: scene.camera.with_resolution(s.width, s.height), ..scene }
+    match (s.scene, file) {
+        (SceneName::Generated(kind), _) => spheres(kind.generate(s.objects as usize, s.seed)),
+        (SceneName::SphereFile, Some(scene)) => spheres(Scene::clone(scene)),
+        (SceneName::SphereFile, None) => panic!("a sphere-file scene needs its file (read when planning)"),
+        (SceneName::TessellatedSpheres, _) => {
+            let scene = SceneKind::RandomSpheres.generate(s.objects as usize, s.seed);
+            triangles(tessellate(&scene.spheres, SceneName::SEGMENTS), tracer::Vec3::Y)
+        }
+        (SceneName::RandomTriangles, _) => triangles(random_triangles(s.objects as usize, s.seed), tracer::Vec3::Y),
+        (SceneName::Mesh, _) => {
+            let source = s.mesh.as_ref().expect("a mesh scene names its mesh (checked when planning)");
+            let mesh = crate::meshes::load_source(&source.0).unwrap_or_else(|e| panic!("mesh {source}: {e}"));
+            triangles(tracer::scene::mesh::Mesh::clone(&mesh), crate::meshes::up_axis(&source.0))
+        }
+    }
 }
 
 /// Seconds to PNG-encode `image` into memory (the render workload's encode phase).
@@ -97,15 +156,15 @@ pub fn timed(settings: &Settings, file: Option<&Scene>, rays: Option<&RaySet>, s
     let t = Instant::now();
     let backend = backend::of(settings.accel);
     let built = if backend.own_threads() {
-        backend.build(settings, &scene.spheres, setup)? // on its own threads (Embree's TBB)
+        backend.build(settings, &scene.geometry(), setup)? // on its own threads (Embree's TBB)
     } else {
         // The others build in the pool: the phase function runs there (installing from inside the pool again, as
         // the backends' builds do, runs in place), where callgrind sees the building thread enter it.
-        setup.install(|| bvhlab_phase_build(|| backend.build(settings, &scene.spheres, setup)))?
+        setup.install(|| bvhlab_phase_build(|| backend.build(settings, &scene.geometry(), setup)))?
     };
     let build_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let output = setup.install(|| built.structure.run(Work::new(&scene, settings, rays)));
+    let output = setup.install(|| built.structure.run(Work::new(scene.spheres(), settings, rays)));
     let trace_s = t.elapsed().as_secs_f64();
     let encode_s = match &output {
         Output::Image(image) => encode_seconds(image),
@@ -146,8 +205,8 @@ pub fn counted(
 ) -> Result<(WorkCounters, u64, Option<RayAnswers>), Error> {
     let scene = make_scene(settings, file);
     let setup = Setup::start(settings)?;
-    let built = backend::of(settings.accel).build(settings, &scene.spheres, &setup)?;
-    let (output, c) = setup.install(|| built.structure.run_counted(Work::new(&scene, settings, rays)));
+    let built = backend::of(settings.accel).build(settings, &scene.geometry(), &setup)?;
+    let (output, c) = setup.install(|| built.structure.run_counted(Work::new(scene.spheres(), settings, rays)));
     let hash = output.hash();
     let answers = match (output, rays, answer_rays) {
         (_, _, None) => None,

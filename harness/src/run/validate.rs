@@ -2,8 +2,10 @@
 //! ([`tracer::agreement`]: the distance tolerance and f64 brute force's arbitration): choosing the reference,
 //! the sampling budgets, and counting the outcomes into a row.
 //!
-//! The reference is f32 brute force ([`List`]) for scenes of at most [`BRUTE_FORCE_MAX`] spheres, else the
-//! tracer's flat BVH (binned SAH, front-to-back). Neither is trusted blindly: before its first use, the
+//! The reference is f32 brute force ([`List`]) for scenes of at most [`BRUTE_FORCE_MAX`] primitives, else the
+//! tracer's flat BVH (binned SAH, front-to-back); over triangles both run the watertight test, and f64 brute force
+//! is over the [`Triangle`]s (a ray within rounding of a shared edge or vertex is a tie there: tolerated, counted
+//! as `grazing`). Neither is trusted blindly: before its first use, the
 //! reference's answers are checked against f64 brute force on every ray when rays × spheres ≤
 //! [`ARBITRATION_BUDGET`], else on at least [`SAMPLE_MIN`] rays evenly strided over the set ([`sample`]); the
 //! count is recorded as `reference_checked`, and an answer f64 does not accept fails every configuration
@@ -20,14 +22,53 @@ use std::sync::Arc;
 
 use schema::{SceneName, Settings, WrongSide};
 use tracer::accel::{AccelKind, BvhParams, FlatBvh, List, Split, Traversal};
+use tracer::agreement::RayCandidates;
 use tracer::agreement::{self, Answer, BruteForce64, Outcome, Strictness, arbitrate};
 use tracer::counters::NoCounters;
 use tracer::executor::Strategy;
-use tracer::geometry::{Ray, Sphere};
+use tracer::geometry::{Ray, Sphere, Triangle, TrianglePrimitive, WatertightTriangle};
 use tracer::rays::{RayAnswers, RayKind, RaySet, trace};
 use tracer::scene::Scene;
 
-use super::measure::make_scene;
+use super::measure::{SceneData, make_scene};
+
+/// f64 brute force over a scene's primitives.
+#[derive(Debug)]
+pub enum Exact {
+    Spheres(BruteForce64<Sphere>),
+    Triangles(BruteForce64<Triangle>),
+}
+
+impl Exact {
+    /// f64 brute force over the scene's primitives.
+    pub fn of(scene: &SceneData) -> Self {
+        match scene {
+            SceneData::Spheres(s) => Exact::Spheres(BruteForce64::new(&s.spheres)),
+            SceneData::Triangles(t) => Exact::Triangles(BruteForce64::new(&t.mesh.triangles().collect::<Vec<_>>())),
+        }
+    }
+
+    /// True for a scene of nothing.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Number of primitives.
+    pub fn len(&self) -> usize {
+        match self {
+            Exact::Spheres(b) => b.len(),
+            Exact::Triangles(b) => b.len(),
+        }
+    }
+
+    /// Every primitive each ray meets, in f64.
+    pub fn candidates(&self, rays: &[Ray]) -> Vec<RayCandidates> {
+        match self {
+            Exact::Spheres(b) => b.candidates(rays),
+            Exact::Triangles(b) => b.candidates(rays),
+        }
+    }
+}
 
 /// Largest scene validated against brute force.
 pub const BRUTE_FORCE_MAX: usize = 10_000;
@@ -83,8 +124,8 @@ pub struct Reference {
     pub answers: Arc<RayAnswers>,
     /// The reference's name (`list` or `flat-bvh`).
     pub name: &'static str,
-    /// The scene's spheres, for f64 brute force.
-    pub exact: Arc<BruteForce64<Sphere>>,
+    /// The scene's primitives, for f64 brute force.
+    pub exact: Arc<Exact>,
     /// Rays whose reference answer f64 brute force checked.
     pub checked: usize,
     /// Those of them it did not accept.
@@ -93,12 +134,7 @@ pub struct Reference {
 
 impl Reference {
     /// Checks `answers` against f64 brute force on [`sample_size`] rays of `set`.
-    pub fn check(
-        set: Arc<RaySet>,
-        answers: Arc<RayAnswers>,
-        name: &'static str,
-        exact: Arc<BruteForce64<Sphere>>,
-    ) -> Self {
+    pub fn check(set: Arc<RaySet>, answers: Arc<RayAnswers>, name: &'static str, exact: Arc<Exact>) -> Self {
         let picked = sample(set.rays.len(), sample_size(set.rays.len(), exact.len()));
         let rays: Vec<Ray> = picked.iter().map(|&i| set.rays[i]).collect();
         let found = exact.candidates(&rays);
@@ -167,7 +203,7 @@ type Entry = (Arc<RaySet>, Arc<RayAnswers>, &'static str);
 #[derive(Default)]
 pub struct RayBank {
     sets: HashMap<(SceneKey, RayKind), Entry>,
-    spheres: HashMap<SceneKey, Arc<BruteForce64<Sphere>>>,
+    exact: HashMap<SceneKey, Arc<Exact>>,
     checked: HashMap<(SceneKey, RayKind), Arc<Reference>>,
 }
 
@@ -175,9 +211,11 @@ impl RayBank {
     fn key(s: &Settings, file: Option<&Scene>) -> SceneKey {
         let source = match (s.scene, file) {
             (SceneName::SphereFile, Some(scene)) => format!("file:{:016x}", scene.fingerprint()),
+            (SceneName::Mesh, _) => format!("mesh:{}", s.mesh.as_ref().map_or("-", |m| m.0.as_str())),
             (scene, _) => schema::Named::name(scene).to_string(),
         };
-        (source, s.objects, s.seed, s.width, s.height)
+        let view = s.view.map_or("-", |v| v.name());
+        (format!("{source} {view}"), s.objects, s.seed, s.width, s.height)
     }
 
     /// The ray set of kind `kind` for the scene of `s`, its reference answers and the reference's name.
@@ -187,18 +225,13 @@ impl RayBank {
             return entry.clone();
         }
         let scene = make_scene(s, file);
-        let (set, answers, name) = if scene.spheres.len() <= BRUTE_FORCE_MAX {
-            let list = List::build(&scene.spheres);
-            let set = generate(kind, &scene, s.seed);
-            let answers = trace::<_, NoCounters>(&list, &set, &Strategy::SERIAL).0;
-            (set, answers, AccelKind::List.name())
-        } else {
-            let tree = FlatBvh::build(&scene.spheres, &reference_params());
-            let set = generate(kind, &scene, s.seed);
-            let answers = trace::<_, NoCounters>(&tree, &set, &Strategy::SERIAL).0;
-            (set, answers, AccelKind::FlatBvh.name())
+        let (set, answers, name) = match &scene {
+            SceneData::Spheres(sc) => reference_answers(&sc.spheres, generate(kind, &scene, s.seed)),
+            SceneData::Triangles(t) => {
+                reference_answers(&WatertightTriangle::all(t.mesh.triangles()), generate(kind, &scene, s.seed))
+            }
         };
-        self.spheres.entry(key.clone()).or_insert_with(|| Arc::new(BruteForce64::new(&scene.spheres)));
+        self.exact.entry(key.clone()).or_insert_with(|| Arc::new(Exact::of(&scene)));
         let entry = (Arc::new(set), Arc::new(answers), name);
         self.sets.insert((key, kind), entry.clone());
         entry
@@ -211,17 +244,41 @@ impl RayBank {
             return checked.clone();
         }
         let (set, answers, name) = self.get(s, file, kind);
-        let reference = Arc::new(Reference::check(set, answers, name, self.spheres[&key.0].clone()));
+        let reference = Arc::new(Reference::check(set, answers, name, self.exact[&key.0].clone()));
         self.checked.insert(key, reference.clone());
         reference
     }
 }
 
+/// The reference's answers to `set` over `prims`: f32 brute force up to [`BRUTE_FORCE_MAX`], else the flat BVH.
+fn reference_answers<P: tracer::accel::bvh::split::Referenced>(
+    prims: &[P],
+    set: RaySet,
+) -> (RaySet, RayAnswers, &'static str) {
+    if prims.len() <= BRUTE_FORCE_MAX {
+        let answers = trace::<_, NoCounters>(&List::build(prims), &set, &Strategy::SERIAL).0;
+        (set, answers, AccelKind::List.name())
+    } else {
+        let answers = trace::<_, NoCounters>(&FlatBvh::build(prims, &reference_params()), &set, &Strategy::SERIAL).0;
+        (set, answers, AccelKind::FlatBvh.name())
+    }
+}
+
 /// The ray set of `kind` for `scene`; secondary rays start from primary hits found with a fast tracer tree
-/// (every tree gives the same hits), diffuse directions drawn from the scene seed.
-pub fn generate(kind: RayKind, scene: &tracer::scene::Scene, seed: u64) -> RaySet {
-    let fast = FlatBvh::build(&scene.spheres, &BvhParams { traversal: Traversal::FrontToBack, ..BvhParams::default() });
-    RaySet::generate(kind, scene, &fast, seed ^ 0xd1ff_u64)
+/// (every tree gives the same hits; over triangles the watertight test's), diffuse and ambient-occlusion
+/// directions drawn from the scene seed.
+pub fn generate(kind: RayKind, scene: &SceneData, seed: u64) -> RaySet {
+    let params = BvhParams { traversal: Traversal::FrontToBack, ..BvhParams::default() };
+    match scene {
+        SceneData::Spheres(scene) => {
+            RaySet::generate(kind, scene, &FlatBvh::build(&scene.spheres, &params), seed ^ 0xd1ff_u64)
+        }
+        SceneData::Triangles(t) => {
+            let prims = WatertightTriangle::all(t.mesh.triangles());
+            let fast = FlatBvh::build(&prims, &params);
+            RaySet::generate_over(kind, &t.camera, t.light, &prims, &fast, seed ^ 0xd1ff_u64)
+        }
+    }
 }
 
 #[cfg(test)]
@@ -266,7 +323,7 @@ mod tests {
 
     /// One sphere; ray 0 hits it squarely, ray 1 exactly tangent (f32 brute force hits it), ray 2 misses it by
     /// 1e-3 of its radius.
-    fn tangent_case() -> (Arc<RaySet>, Arc<RayAnswers>, Arc<BruteForce64<Sphere>>) {
+    fn tangent_case() -> (Arc<RaySet>, Arc<RayAnswers>, Arc<Exact>) {
         let spheres = [Sphere::new(Vec3::new(0.0, 0.0, -10.0), 1.0)];
         let rays = vec![
             Ray::new(Vec3::ZERO, -Vec3::Z),
@@ -275,7 +332,7 @@ mod tests {
         ];
         let set = set(rays);
         let answers = trace::<_, NoCounters>(&List::build(&spheres), &set, &Strategy::SERIAL).0;
-        (Arc::new(set), Arc::new(answers), Arc::new(BruteForce64::new(&spheres)))
+        (Arc::new(set), Arc::new(answers), Arc::new(Exact::Spheres(BruteForce64::new(&spheres))))
     }
 
     #[test]

@@ -7,6 +7,7 @@
 mod camera;
 mod clustered_spheres;
 pub mod mesh;
+mod mesh_scene;
 mod random_spheres;
 mod random_triangles;
 pub mod sphere_file;
@@ -20,6 +21,7 @@ use crate::geometry::{Aabb, Sphere};
 use crate::rng::SplitMix64;
 
 pub use camera::{Camera, CameraRays};
+pub use mesh_scene::{MeshScene, View};
 pub use random_triangles::random_triangles;
 pub use sphere_file::SphereFileError;
 pub use tessellate::tessellate;
