@@ -137,7 +137,7 @@ fn bad_configs_exit_2_with_one_line_and_write_nothing() {
         (
             "missing mesh file",
             "name = \"t\"\n[sweep]\nscene = \"mesh\"\nmesh = \"absent.obj\"\nworkload = \"primary\"\n",
-            "mesh: absent.obj: no such mesh file (allowed: a data set name or an .obj/.ply path)",
+            "-bad/absent.obj: no such mesh file (allowed: a data set name or an .obj/.ply path)",
         ),
         (
             "mesh scene without a mesh",
@@ -768,14 +768,16 @@ fn render_takes_schema_settings_and_refuses_bad_ones() {
     }
 }
 
-/// `experiments/meshes.toml --quick`: procedural triangle scenes, every backend this machine has (Embree's single
+/// `experiments/triangle-scenes.toml --quick`: procedural triangle scenes, every backend this machine has (Embree's single
 /// rays and packets, obvhs, tinybvh, ours with both triangle tests), every ray kind, each validated exact.
 #[test]
-fn quick_meshes_experiment_validates_every_configuration() {
+fn quick_triangle_scenes_experiment_validates_every_configuration() {
     let dir = temp("meshes");
     let out = dir.join("out");
-    let o =
-        harness().args(["run", "--quick", "experiments/meshes.toml", "--out", out.to_str().unwrap()]).output().unwrap();
+    let o = harness()
+        .args(["run", "--quick", "experiments/triangle-scenes.toml", "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let rows = schema::row::read_rows(&std::fs::read_to_string(out.join("runs.csv")).unwrap()).unwrap();
     assert!(rows.len() >= 2 * 2 * 4 * 5, "{}", rows.len());

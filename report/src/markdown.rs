@@ -31,7 +31,7 @@ pub fn report(rows: &Rows, spec: &ReportSpec, claims: &[ClaimResult]) -> String 
 ");
         md.push_str(
             "Each disagreement was decided by an f64 brute force: `wrong` says whose answer it showed wrong \
-(beyond the f32 rounding bound of the ray-sphere test); grazing rays (within it) are tolerated and counted apart.
+(beyond the f32 rounding bound of the primitive test); grazing rays, edge ties and leaks (within it) are tolerated and counted apart.
 
 ",
         );
@@ -232,16 +232,25 @@ fn validation_line(md: &mut String, runs: &[Run]) {
     if checked > 0.0 {
         let _ = write!(md, "; each reference checked against f64 brute force on up to {checked} rays of its ray set");
     }
-    if grazing.is_empty() {
-        md.push('\n');
-    } else {
-        let _ = writeln!(
+    if !grazing.is_empty() {
+        let _ = write!(
             md,
             "; {graze_rays} grazing rays tolerated in {} configurations (f64 brute force puts them within the f32 \
-             rounding bound of the ray-sphere test)",
+             rounding bound of the primitive test)",
             grazing.len()
         );
     }
+    for (c, what) in [(column::ties, "edge ties (same distance, another triangle)"), (column::leaks, "leaks")] {
+        let mut by_series: std::collections::BTreeMap<&str, f64> = Default::default();
+        for r in configs.values().filter(|r| r.num(c) > 0.0) {
+            *by_series.entry(r.series()).or_default() += r.num(c);
+        }
+        if !by_series.is_empty() {
+            let each: Vec<String> = by_series.iter().map(|(s, n)| format!("{s} {n}")).collect();
+            let _ = write!(md, "; {what}: {}", each.join(", "));
+        }
+    }
+    md.push('\n');
 }
 
 /// One line per machine that recorded rows (rows recorded before machine identity existed are left out).

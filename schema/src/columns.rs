@@ -174,8 +174,14 @@ declare_columns! {
         /// Rays whose answers disagreed with the reference and that f64 brute force did not excuse as grazing.
         mismatches: u64, Validation;
         /// Rays whose answers disagreed with the reference where f64 brute force shows a grazing ray: the hit/miss
-        /// decision or the distance lies within the f32 rounding bound of the ray-sphere test (tolerated).
+        /// decision or the distance lies within the f32 rounding bound of the test (tolerated).
         grazing: u64, Validation, added 2;
+        /// Rays where the backend and the reference hit at the same distance but name different primitives, each
+        /// allowed there by f64: an edge or vertex shared by two triangles (tolerated).
+        ties: u64, Validation, added 8;
+        /// Rays that crossed an edge or vertex shared by two or more triangles where the backend missed them all
+        /// (a miss or a later hit), within each triangle's rounding bound: leaks of a test that is not watertight.
+        leaks: u64, Validation, added 8;
         /// Rays of the reference's answers checked against f64 brute force before it was trusted.
         reference_checked: u64, Validation, added 2;
         /// Which answers f64 brute force showed wrong on the rays counted in `mismatches`: `-` (none), `backend`,

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use report::spec::{ClaimKind, ClaimSpec, PlotKind, PlotSpec, ReportSpec};
 use schema::columns::Replaced;
-use schema::{Axis, AxisValue, Raw};
+use schema::{Axis, AxisValue, MeshSource, Raw};
 
 use crate::error::Error;
 use table::Section;
@@ -246,7 +246,11 @@ impl Experiment {
         let name = top.required_string("name")?.to_string();
         identifier(&top, "name", &name, "name")?;
         let sweep_section = top.section("sweep")?.ok_or_else(|| top.error_here("missing [sweep] table"))?;
-        let series = parse_series(&top)?;
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let mut series = parse_series(&top)?;
+        series.iter_mut().for_each(|s| meshes_relative_to(dir, &mut s.fixed));
+        let mut sweep = axis_values(&sweep_section, &["sphere_file"])?;
+        meshes_relative_to(dir, &mut sweep);
         let labels = Labels(series.iter().map(|s| s.label.clone()).collect());
         let reference = top.string("reference")?.map(str::to_string);
         if let Some(r) = &reference {
@@ -261,8 +265,8 @@ impl Experiment {
             warmups: top.integer("warmups", 0, 100)?.unwrap_or(0) as u32,
             order: parse_order(&top)?,
             order_seed: top.integer("order_seed", 0, i64::MAX)?.unwrap_or(0) as u64,
-            sweep: axis_values(&sweep_section, &["sphere_file"])?,
-            sphere_file: sweep_section.string("sphere_file")?.map(|f| path.parent().unwrap_or(Path::new(".")).join(f)),
+            sweep,
+            sphere_file: sweep_section.string("sphere_file")?.map(|f| dir.join(f)),
             exclude: parse_excludes(&top, &labels)?,
             quick: parse_quick(&top)?,
             plots: top
@@ -330,6 +334,18 @@ fn parse_series(top: &Section<'_>) -> Result<Vec<Series>, Error> {
         series.push(Series { label, fixed: axis_values(&s, &["label"])? });
     }
     Ok(series)
+}
+
+/// `mesh` paths (not data set names) taken relative to the config's folder, as `sphere_file` is.
+fn meshes_relative_to(dir: &Path, values: &mut AxisValues) {
+    for value in values.get_mut(&Axis::mesh).into_iter().flatten() {
+        if let AxisValue::mesh(Some(MeshSource(source))) = value
+            && crate::meshes::is_path(source)
+            && Path::new(source.as_str()).is_relative()
+        {
+            *source = dir.join(source.as_str()).display().to_string();
+        }
+    }
 }
 
 /// `[[exclude]]` tables.
@@ -539,5 +555,21 @@ mod tests {
         let e =
             Experiment::parse(Path::new("t.toml"), "name = \"t\"\n[sweep]\nwidth = true\n").unwrap_err().to_string();
         assert!(e.contains("sweep.width[0]: expected a string or number, found a boolean"), "{e}");
+    }
+
+    #[test]
+    fn mesh_paths_are_relative_to_the_config_and_data_set_names_are_not() {
+        let text = "name = \"t\"\n[sweep]\nscene = \"mesh\"\nmesh = [\"bunny\", \"m.obj\", \"/abs/c.ply\"]\n\
+                    [[series]]\nlabel = \"s\"\nmesh = \"../d/city\"\n";
+        let e = Experiment::parse(Path::new("exp/t.toml"), text).unwrap();
+        let mesh = |v: &AxisValue| match v {
+            AxisValue::mesh(Some(m)) => m.0.clone(),
+            other => panic!("{other:?}"),
+        };
+        let sweep: Vec<String> = e.sweep[&Axis::mesh].iter().map(mesh).collect();
+        assert_eq!(sweep, ["bunny", "exp/m.obj", "/abs/c.ply"]);
+        assert_eq!(mesh(&e.series[0].fixed[&Axis::mesh][0]), "exp/../d/city");
+        let here = Experiment::parse(Path::new("t.toml"), text).unwrap();
+        assert_eq!(mesh(&here.sweep[&Axis::mesh][1]), "m.obj", "a config in the working folder");
     }
 }

@@ -23,7 +23,7 @@ use crate::rows::RowLog;
 use measure::Timing;
 use provenance::{Provenance, load_average_1m, timestamp_now};
 use sweep::Sweep;
-use validate::RayBank;
+use validate::{Judgement, RayBank};
 use worker::WorkerRequest;
 
 /// File names inside a run folder.
@@ -132,14 +132,8 @@ struct Checked {
     counters: WorkCounters,
     output_hash: u64,
     reference: &'static str,
-    /// Disagreements with the reference that f64 brute force did not accept.
-    mismatches: usize,
-    /// Disagreements it tolerated (grazing rays).
-    grazing: usize,
-    /// Rays of the reference's answers checked against f64 brute force.
-    reference_checked: usize,
-    /// Whose answers f64 showed wrong: `-`, `backend`, `reference` or `both`.
-    wrong_side: WrongSide,
+    /// Mismatches, tolerated disagreements by kind, the reference's own check and whose answers were wrong.
+    judged: Judgement,
     rays: usize,
 }
 
@@ -147,13 +141,15 @@ impl Checked {
     /// The note for a configuration (`what`) that failed validation.
     fn failure(&self, what: &str) -> String {
         format!(
-            "VALIDATION FAILED: {what}: {} of {} rays disagree with {} beyond f64 brute force's tolerance ({} grazing \
-             tolerated); f64 shows the {} answers wrong; this configuration is not timed",
-            self.mismatches,
+            "VALIDATION FAILED: {what}: {} of {} rays disagree with {} beyond f64 brute force's tolerance ({} grazing, \
+             {} ties, {} leaks tolerated); f64 shows the {} answers wrong; this configuration is not timed",
+            self.judged.mismatches,
             self.rays,
             self.reference,
-            self.grazing,
-            match self.wrong_side {
+            self.judged.grazing,
+            self.judged.ties,
+            self.judged.leaks,
+            match self.judged.wrong_side {
                 WrongSide::Both => "backend's and the reference's",
                 WrongSide::Reference => "reference's",
                 WrongSide::Backend | WrongSide::Neither => "backend's",
@@ -184,10 +180,7 @@ fn check(plan: &Plan, c: &Configuration, bank: &mut RayBank) -> Result<Checked, 
             counters,
             output_hash,
             reference: "-",
-            mismatches: 0,
-            grazing: 0,
-            reference_checked: 0,
-            wrong_side: WrongSide::Neither,
+            judged: Judgement::default(),
             rays: 0,
         });
     }
@@ -201,10 +194,7 @@ fn check(plan: &Plan, c: &Configuration, bank: &mut RayBank) -> Result<Checked, 
         counters,
         output_hash,
         reference: reference.name,
-        mismatches: judged.mismatches,
-        grazing: judged.grazing,
-        reference_checked: judged.reference_checked,
-        wrong_side: judged.wrong_side,
+        judged,
         rays: set.rays.len(),
     })
 }
@@ -272,10 +262,12 @@ fn row(r: &Recording, c: &Configuration, rep: u32, t: &Timing, v: &Checked, star
     row.harness_version = p.harness_version.clone();
     row.validation = v.status;
     row.validated_against = v.reference.to_string();
-    row.mismatches = v.mismatches as u64;
-    row.grazing = v.grazing as u64;
-    row.reference_checked = v.reference_checked as u64;
-    row.wrong_side = v.wrong_side;
+    row.mismatches = v.judged.mismatches as u64;
+    row.grazing = v.judged.grazing as u64;
+    row.ties = v.judged.ties as u64;
+    row.leaks = v.judged.leaks as u64;
+    row.reference_checked = v.judged.reference_checked as u64;
+    row.wrong_side = v.judged.wrong_side;
     row.peer_info = t.peer_info.clone();
     // A configuration never timed (failed validation) records the kernel it was validated with.
     row.simd_kernel_used = match (t.simd_kernel.as_str(), c.settings.simd_kernel) {
@@ -409,10 +401,14 @@ mod tests {
             counters,
             output_hash: 1,
             reference: "reference",
-            mismatches: 3,
-            grazing: 2,
-            reference_checked: 16_384,
-            wrong_side: WrongSide::Backend,
+            judged: Judgement {
+                mismatches: 3,
+                grazing: 2,
+                ties: 4,
+                leaks: 5,
+                reference_checked: 16_384,
+                wrong_side: WrongSide::Backend,
+            },
             rays: 786_432,
         };
         let provenance = Provenance::collect();
@@ -421,6 +417,7 @@ mod tests {
         let row = row(&recording, &plan.configurations[0], 0, &Timing::untimed(1), &v, started);
         assert_eq!((row.validation, row.mismatches), (ValidationStatus::Failed, 3));
         assert_eq!((row.grazing, row.reference_checked, row.wrong_side), (2, 16_384, WrongSide::Backend));
+        assert_eq!((row.ties, row.leaks), (4, 5));
         let text = format!("{}\n{}", schema::row::header(), schema::row::csv_line(&row).unwrap());
         let back = &schema::row::read_rows(&text).unwrap()[0];
         let metrics =

@@ -23,7 +23,7 @@ use std::sync::Arc;
 use schema::{SceneName, Settings, WrongSide};
 use tracer::accel::{AccelKind, BvhParams, FlatBvh, List, Split, Traversal};
 use tracer::agreement::RayCandidates;
-use tracer::agreement::{self, Answer, BruteForce64, Outcome, Strictness, arbitrate};
+use tracer::agreement::{self, Answer, BruteForce64, Outcome, Strictness, Tolerated, arbitrate};
 use tracer::counters::NoCounters;
 use tracer::executor::Strategy;
 use tracer::geometry::{Ray, Sphere, Triangle, TrianglePrimitive, WatertightTriangle};
@@ -84,8 +84,8 @@ pub(crate) fn reference_params() -> BvhParams {
     BvhParams { split: Split::BinnedSah, traversal: Traversal::FrontToBack, ..BvhParams::default() }
 }
 
-/// Indices of the rays of `set` whose answers disagree (`None` when the answers are not comparable: another
-/// kind or count).
+/// Indices of the rays of `set` whose answers disagree or name different primitives (`None` when the answers
+/// are not comparable: another kind or count).
 pub fn disagreements(set: &RaySet, reference: &RayAnswers, got: &RayAnswers) -> Option<Vec<usize>> {
     let comparable = match (reference, got) {
         (RayAnswers::Closest(want), RayAnswers::Closest(got)) => want.len() == got.len(),
@@ -94,7 +94,10 @@ pub fn disagreements(set: &RaySet, reference: &RayAnswers, got: &RayAnswers) -> 
     };
     comparable.then(|| {
         (0..set.rays.len())
-            .filter(|&i| !Answer::of(reference, i).agrees(&set.rays[i], &Answer::of(got, i), Strictness::Arbitrated))
+            .filter(|&i| {
+                let (want, got) = (Answer::of(reference, i), Answer::of(got, i));
+                !want.agrees(&set.rays[i], &got, Strictness::Arbitrated) || want.names_another(&got)
+            })
             .collect()
     })
 }
@@ -149,11 +152,14 @@ impl Reference {
 }
 
 /// What validation found: disagreements with the reference that f64 brute force did not accept
-/// (`mismatches`) and those it tolerated (`grazing`), the reference's own check, and who was wrong.
-#[derive(Clone, Debug, PartialEq, Eq)]
+/// (`mismatches`) and those it tolerated (`grazing`, `ties`, `leaks`: [`agreement::Tolerated`]), the reference's
+/// own check, and who was wrong.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Judgement {
     pub mismatches: usize,
     pub grazing: usize,
+    pub ties: usize,
+    pub leaks: usize,
     pub reference_checked: usize,
     pub wrong_side: WrongSide,
 }
@@ -164,7 +170,12 @@ pub fn judge(reference: &Reference, got: &RayAnswers) -> Judgement {
     let n = reference.set.rays.len();
     let Some(disagree) = disagreements(&reference.set, &reference.answers, got) else {
         let wrong_side = WrongSide::of(true, !reference.wrong.is_empty());
-        return Judgement { mismatches: n.max(1), grazing: 0, reference_checked: reference.checked, wrong_side };
+        return Judgement {
+            mismatches: n.max(1),
+            reference_checked: reference.checked,
+            wrong_side,
+            ..Judgement::default()
+        };
     };
     let cap = sample_size(n, reference.exact.len());
     let (mut rays, unjudged) = if disagree.len() > cap {
@@ -176,20 +187,23 @@ pub fn judge(reference: &Reference, got: &RayAnswers) -> Judgement {
     rays.sort_unstable();
     rays.dedup();
     let found = reference.exact.candidates(&rays.iter().map(|&i| reference.set.rays[i]).collect::<Vec<_>>());
-    let (mut mismatches, mut grazing, mut backend_wrong, mut reference_wrong) = (unjudged, 0, false, false);
+    let mut judged = Judgement { mismatches: unjudged, reference_checked: reference.checked, ..Judgement::default() };
+    let (mut backend_wrong, mut reference_wrong) = (false, false);
     for (&i, c) in rays.iter().zip(&found) {
         match arbitrate(c, &Answer::of(&reference.answers, i), &Answer::of(got, i)) {
             Outcome::Agree => {}
-            Outcome::Tolerated(_) => grazing += 1,
+            Outcome::Tolerated(Tolerated::Grazing) => judged.grazing += 1,
+            Outcome::Tolerated(Tolerated::Tie) => judged.ties += 1,
+            Outcome::Tolerated(Tolerated::Leak) => judged.leaks += 1,
             Outcome::Mismatch(side) => {
-                mismatches += 1;
+                judged.mismatches += 1;
                 backend_wrong |= side != agreement::WrongSide::Reference;
                 reference_wrong |= side != agreement::WrongSide::Backend;
             }
         }
     }
-    let wrong_side = WrongSide::of(backend_wrong || (unjudged > 0 && !reference_wrong), reference_wrong);
-    Judgement { mismatches, grazing, reference_checked: reference.checked, wrong_side }
+    judged.wrong_side = WrongSide::of(backend_wrong || (unjudged > 0 && !reference_wrong), reference_wrong);
+    judged
 }
 
 /// A scene's identity for caching: scene source, objects, seed and image size.
@@ -293,15 +307,15 @@ mod tests {
     }
 
     #[test]
-    fn disagreements_are_hit_miss_and_distance_differences() {
+    fn disagreements_are_hit_miss_distance_and_primitive_differences() {
         let rays = set(vec![Ray::new(Vec3::ZERO, Vec3::Z); 4]);
         let hit = |t| Hit { t, prim: 1 };
         let want = RayAnswers::Closest(vec![hit(10.0), hit(10.0), PrimaryHits::MISS, hit(10.0)]);
         let got = RayAnswers::Closest(vec![hit(10.0005), hit(10.01), hit(3.0), Hit { t: 10.0, prim: 7 }]);
         assert_eq!(
             disagreements(&rays, &want, &got),
-            Some(vec![1, 2]),
-            "1e-4 relative passes, 1e-3 fails, hit vs miss fails, ids ignored"
+            Some(vec![1, 2, 3]),
+            "1e-4 relative passes, 1e-3 fails, hit vs miss fails, another id goes to f64 (a tie or a wrong id)"
         );
         let flags = |v: &[bool]| RayAnswers::Occluded(v.to_vec());
         assert_eq!(
@@ -343,7 +357,7 @@ mod tests {
         let hit = |t| Hit { t, prim: 0 };
         let miss = PrimaryHits::MISS;
         let judged = |got: Vec<Hit>| judge(&reference, &RayAnswers::Closest(got));
-        let ok = Judgement { mismatches: 0, grazing: 0, reference_checked: 3, wrong_side: WrongSide::Neither };
+        let ok = Judgement { reference_checked: 3, ..Judgement::default() };
         assert_eq!(judged(vec![hit(9.0), hit(10.0), miss]), ok);
         assert_eq!(judged(vec![hit(9.0), miss, miss]), Judgement { grazing: 1, ..ok.clone() }, "tangent: tolerated");
         let backend = Judgement { mismatches: 1, wrong_side: WrongSide::Backend, ..ok.clone() };
@@ -352,6 +366,27 @@ mod tests {
         assert_eq!(judged(vec![miss, hit(10.0), miss]), backend);
         let flags = RayAnswers::Occluded(vec![true; 3]);
         assert_eq!(judge(&reference, &flags).wrong_side, WrongSide::Backend, "not comparable");
+    }
+
+    /// Two triangles sharing an edge, one ray straight onto its midpoint: the other triangle is a tie, a miss a
+    /// leak, an id f64 does not allow a mismatch.
+    #[test]
+    fn shared_edges_count_ties_and_leaks() {
+        let v = Vec3::new;
+        let a = Triangle::new(v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(0.0, 1.0, 0.0));
+        let b = Triangle::new(v(1.0, 0.0, 0.0), v(1.0, 1.0, 0.0), v(0.0, 1.0, 0.0));
+        let rays = Arc::new(set(vec![Ray::new(v(0.5, 0.5, 1.0), -Vec3::Z), Ray::new(v(0.2, 0.2, 1.0), -Vec3::Z)]));
+        let hits = |h: [Hit; 2]| RayAnswers::Closest(h.to_vec());
+        let on = |prim| Hit { t: 1.0, prim };
+        let exact = Arc::new(Exact::Triangles(BruteForce64::new(&[a, b])));
+        let reference = Reference::check(rays, Arc::new(hits([on(0), on(0)])), "list", exact);
+        assert_eq!((reference.checked, reference.wrong.len()), (2, 0));
+        let judged = |got| judge(&reference, &hits(got));
+        assert_eq!(judged([on(0), on(0)]), Judgement { reference_checked: 2, ..Judgement::default() });
+        assert_eq!((judged([on(1), on(0)]).ties, judged([on(1), on(0)]).mismatches), (1, 0));
+        assert_eq!((judged([PrimaryHits::MISS, on(0)]).leaks, judged([PrimaryHits::MISS, on(0)]).mismatches), (1, 0));
+        let wrong_id = judged([on(0), on(1)]);
+        assert_eq!((wrong_id.mismatches, wrong_id.ties, wrong_id.wrong_side), (1, 0, WrongSide::Backend));
     }
 
     #[test]

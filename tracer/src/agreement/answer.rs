@@ -41,6 +41,11 @@ impl Answer {
         Answer::Closest((hit.prim != PrimaryHits::MISS.prim).then_some(hit))
     }
 
+    /// True when both are hits that name different primitives (a tie, when they agree on `t`).
+    pub fn names_another(&self, got: &Answer) -> bool {
+        matches!((self, got), (Answer::Closest(Some(w)), Answer::Closest(Some(g))) if w.prim != g.prim)
+    }
+
     /// True when `got` agrees with this (the reference's) answer to `ray` under `strictness`. Primitive ids are
     /// not compared (overlapping spheres may tie).
     pub fn agrees(&self, ray: &Ray, got: &Answer, strictness: Strictness) -> bool {

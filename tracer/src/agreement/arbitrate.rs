@@ -5,7 +5,11 @@
 //! when it differs only in ways the f32 test's rounding bound allows ([`crate::geometry::F32Outcomes`]): a
 //! closest-hit answer at `t` iff some primitive may be reported at `t` (within the tolerance) and none must be
 //! reported before it; a miss iff none must be reported; an occlusion answer `true` iff some primitive may be
-//! reported, `false` iff none must.
+//! reported, `false` iff none must. A hit must also name a primitive that may be reported at its `t`.
+//!
+//! A tolerated disagreement is one of three kinds ([`Tolerated`]): a *tie* (the same distance, another primitive:
+//! an edge or vertex shared by two triangles), a *leak* (the exact hit lies on an edge or vertex shared by two or
+//! more primitives, and the answer slipped between them: a miss or a later hit) or, otherwise, a *grazing* ray.
 
 use super::{Answer, RayCandidates, Strictness, t_tolerance};
 
@@ -43,6 +47,11 @@ pub enum Outcome {
 pub enum Tolerated {
     /// The ray grazes a primitive, or the distance lies within the root bound, where f32 cannot decide.
     Grazing,
+    /// The same distance, another primitive, both allowed there: an edge or vertex shared by two triangles.
+    Tie,
+    /// The backend's answer slipped between primitives that share the exact hit's edge or vertex: a miss or a
+    /// later hit, which the f32 rounding bound allows for each primitive alone (what a watertight test prevents).
+    Leak,
 }
 
 /// Whose answer f64 showed wrong.
@@ -60,9 +69,28 @@ impl RayCandidates {
     /// `answer` judged against f64.
     pub fn verdict(&self, answer: &Answer) -> Verdict {
         match *answer {
+            Answer::Closest(Some(hit)) if !self.may_name(hit.prim, hit.t) => Verdict::Wrong,
             Answer::Closest(hit) => self.closest(hit.map(|h| h.t)),
             Answer::Occluded(flag) => self.occluded(flag),
         }
+    }
+
+    /// True when primitive `prim` may be reported at `t`.
+    fn may_name(&self, prim: u32, t: f32) -> bool {
+        let slack = t_tolerance(&self.ray, t) as f64;
+        self.get(prim).is_some_and(|c| c.exact.outcomes.may_report(t as f64, slack))
+    }
+
+    /// True when `answer` misses the exact hit (a miss, a later hit, not occluded) where the ray crosses an
+    /// edge or vertex shared by two or more primitives: the ray slipped between them.
+    fn slipped_through(&self, answer: &Answer) -> bool {
+        let Some((_, t)) = self.exact_closest() else { return false };
+        let slack = t_tolerance(&self.ray, t as f32) as f64;
+        let missed = match *answer {
+            Answer::Closest(hit) => hit.is_none_or(|h| h.t as f64 > t + slack),
+            Answer::Occluded(flag) => !flag,
+        };
+        missed && self.crosses_shared
     }
 
     /// A closest-hit answer (`None` for a miss) judged against f64.
@@ -101,10 +129,18 @@ impl RayCandidates {
 }
 
 /// The backend's answer `got` against the reference's `want` to the ray of `c`, by f64: both acceptable and
-/// agreeing, [`Outcome::Agree`]; both acceptable, [`Tolerated::Grazing`]; else a mismatch, naming the wrong side.
+/// agreeing, [`Outcome::Agree`] (or [`Tolerated::Tie`] when they name different primitives); both acceptable,
+/// [`Tolerated::Leak`] or [`Tolerated::Grazing`]; else a mismatch, naming the wrong side.
 pub fn arbitrate(c: &RayCandidates, want: &Answer, got: &Answer) -> Outcome {
     match (c.verdict(got).acceptable(), c.verdict(want).acceptable()) {
-        (true, true) if want.agrees(&c.ray, got, Strictness::Arbitrated) => Outcome::Agree,
+        (true, true) if want.agrees(&c.ray, got, Strictness::Arbitrated) => {
+            if want.names_another(got) {
+                Outcome::Tolerated(Tolerated::Tie)
+            } else {
+                Outcome::Agree
+            }
+        }
+        (true, true) if c.slipped_through(got) => Outcome::Tolerated(Tolerated::Leak),
         (true, true) => Outcome::Tolerated(Tolerated::Grazing),
         (false, true) => Outcome::Mismatch(WrongSide::Backend),
         (true, false) => Outcome::Mismatch(WrongSide::Reference),
@@ -139,6 +175,33 @@ mod tests {
             arbitrate(square, &Answer::Occluded(true), &Answer::Occluded(false)),
             Outcome::Mismatch(WrongSide::Backend)
         );
+    }
+
+    /// Two triangles sharing the edge from (1, 0, 0) to (0, 1, 0), and a ray straight down onto its midpoint:
+    /// either triangle is a tie, a miss or the floor behind is a leak, another primitive's id is wrong; one
+    /// triangle alone, the miss is a grazing ray.
+    #[test]
+    fn shared_edges_give_ties_and_leaks_and_lone_edges_graze() {
+        use crate::geometry::Triangle;
+        let v = |x, y, z| Vec3::new(x, y, z);
+        let a = Triangle::new(v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(0.0, 1.0, 0.0));
+        let b = Triangle::new(v(1.0, 0.0, 0.0), v(1.0, 1.0, 0.0), v(0.0, 1.0, 0.0));
+        let floor = Triangle::new(v(-9.0, -9.0, -1.0), v(9.0, -9.0, -1.0), v(0.0, 9.0, -1.0));
+        let ray = Ray::new(v(0.5, 0.5, 1.0), -Vec3::Z);
+        let hit = |t, prim| Answer::Closest(Some(Hit { t, prim }));
+        let c = &BruteForce64::new(&[a, b, floor]).candidates_of(&ray);
+        assert_eq!(c.exact_closest().map(|(_, t)| t), Some(1.0));
+        assert_eq!(arbitrate(c, &hit(1.0, 0), &hit(1.0, 0)), Outcome::Agree);
+        assert_eq!(arbitrate(c, &hit(1.0, 0), &hit(1.0, 1)), Outcome::Tolerated(Tolerated::Tie));
+        assert_eq!(arbitrate(c, &hit(1.0, 0), &hit(2.0, 2)), Outcome::Tolerated(Tolerated::Leak));
+        assert_eq!(arbitrate(c, &hit(1.0, 0), &hit(1.0, 2)), Outcome::Mismatch(WrongSide::Backend), "floor at 1");
+        let occluded = |f| Answer::Occluded(f);
+        let lone = &BruteForce64::new(&[a, b]).candidates_of(&ray);
+        assert_eq!(arbitrate(lone, &hit(1.0, 1), &Answer::Closest(None)), Outcome::Tolerated(Tolerated::Leak));
+        assert_eq!(arbitrate(lone, &occluded(true), &occluded(false)), Outcome::Tolerated(Tolerated::Leak));
+        let one = &BruteForce64::new(&[a]).candidates_of(&ray);
+        assert_eq!(arbitrate(one, &hit(1.0, 0), &Answer::Closest(None)), Outcome::Tolerated(Tolerated::Grazing));
+        assert_eq!(arbitrate(one, &hit(1.0, 0), &hit(1.0, 1)), Outcome::Mismatch(WrongSide::Backend), "no such id");
     }
 
     #[test]

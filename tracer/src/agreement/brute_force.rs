@@ -2,7 +2,7 @@
 
 use rayon::prelude::*;
 
-use super::{ExactAnswer, ExactPrimitive};
+use super::{ExactAnswer, ExactPrimitive, t_tolerance};
 use crate::geometry::Ray;
 
 /// A scene's primitives laid out for f64 brute force.
@@ -28,6 +28,9 @@ pub struct RayCandidates {
     pub ray: Ray,
     /// Its candidates, by primitive index.
     pub list: Vec<Candidate>,
+    /// True when the ray crosses an edge or vertex shared by its candidates at the exact closest hit (see
+    /// [`BruteForce64::crosses_shared`]): an answer that misses them there slipped between them.
+    pub crosses_shared: bool,
 }
 
 impl<P: ExactPrimitive> BruteForce64<P> {
@@ -55,10 +58,41 @@ impl<P: ExactPrimitive> BruteForce64<P> {
                 let exact = self.prims[prim as usize].exact(ray);
                 exact.outcomes.may_hit().then_some(Candidate { prim, exact })
             })
+            .collect::<Vec<_>>();
+        let crosses_shared = self.crosses_shared(ray, &list);
+        RayCandidates { ray: *ray, list, crosses_shared }
+    }
+
+    /// True when two or more of `list` may be reported at the exact closest hit and the surface they make covers
+    /// the hit point: rays parallel to `ray`, moved sideways from it by [`CROSSING_ULPS`] ulps of the hit point in
+    /// eight directions, each hit one of them in f64. A ray that only touches them (a silhouette edge or vertex)
+    /// does not cross.
+    fn crosses_shared(&self, ray: &Ray, list: &[Candidate]) -> bool {
+        let Some(t) = list.iter().filter_map(|c| c.exact.hit).min_by(f64::total_cmp) else { return false };
+        let slack = t_tolerance(ray, t as f32) as f64;
+        let near: Vec<&P> = list
+            .iter()
+            .filter(|c| c.exact.outcomes.may_report(t, slack))
+            .map(|c| &self.prims[c.prim as usize])
             .collect();
-        RayCandidates { ray: *ray, list }
+        if near.len() < 2 {
+            return false;
+        }
+        let point = ray.at(t as f32);
+        let step = CROSSING_ULPS * f32::EPSILON * point.abs().max_element().max(f32::MIN_POSITIVE);
+        let back = (1.0 / 16.0f32).min(t as f32);
+        let (u, v) = ray.dir.normalize().any_orthonormal_pair();
+        (0..8).all(|k| {
+            let (sin, cos) = (k as f32 * std::f32::consts::FRAC_PI_4).sin_cos();
+            let moved = Ray::new(point - ray.dir * back + (u * cos + v * sin) * step, ray.dir);
+            near.iter().any(|p| p.exact(&moved).hit.is_some_and(|h| h < 2.0 * back as f64))
+        })
     }
 }
+
+/// How far [`BruteForce64`]'s crossing test moves a ray sideways, in ulps of the hit point's largest coordinate:
+/// far beyond the f32 tests' rounding, far within any triangle of the meshes measured here.
+pub const CROSSING_ULPS: f32 = 256.0;
 
 impl RayCandidates {
     /// The exact closest hit: primitive and `t`.
