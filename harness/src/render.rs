@@ -1,7 +1,8 @@
 //! `harness render`: one image of one configuration — any backend, every setting from the schema (`--set
 //! KEY=VALUE`, the keys, defaults and allowed values of a config's `[sweep]`) — with its timings, structure
 //! statistics and (optionally) work counters. It builds and renders through the same setup and backend path as a
-//! timed run.
+//! timed run. Sphere scenes are Whitted-shaded; triangle scenes flat-shaded (grey, one light with hard shadows,
+//! [`tracer::render::render_mesh`]).
 
 use std::io::BufWriter;
 use std::time::Instant;
@@ -14,7 +15,7 @@ use crate::backend::workload::{Output, Work};
 use crate::backend::{self, Setup};
 use crate::cli::RenderArgs;
 use crate::error::Error;
-use crate::run::measure::make_scene;
+use crate::run::measure::{SceneData, make_scene};
 
 /// A `--set` value as a config value: an integer, else a number, else text.
 fn raw(text: &str) -> Raw<'_> {
@@ -59,9 +60,25 @@ fn scene_file(settings: &Settings, args: &RenderArgs) -> Result<Option<Scene>, E
     sphere_file::parse(&text).map(Some).map_err(|e| Error::Input(format!("{}: {e}", path.display())))
 }
 
-/// The settings that apply to this configuration, as `key=value`.
+/// Loads a mesh scene's mesh (once per process, as planning does), so that a missing or bad one is one line.
+fn load_mesh(settings: &Settings) -> Result<(), Error> {
+    match (settings.scene, &settings.mesh) {
+        (SceneName::Mesh, None) => {
+            Err(Error::Input("--set scene=mesh needs --set mesh=NAME (a data set name or an .obj/.ply path)".into()))
+        }
+        (SceneName::Mesh, Some(m)) => crate::meshes::load_source(&m.0).map(|_| ()).map_err(|e| match e {
+            Error::Input(why) => Error::Input(format!("--set mesh: {why}")),
+            other => other,
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// The settings that apply to this configuration, as `key=value` (no `max_depth` for triangle scenes: their flat
+/// shading has no reflections).
 fn describe(settings: &Settings) -> String {
-    let applies = Axis::ALL.iter().filter(|&&a| settings.applies(a) && a != Axis::workload);
+    let shown = |a: Axis| a != Axis::workload && !(a == Axis::max_depth && settings.scene.is_triangles());
+    let applies = Axis::ALL.iter().filter(|&&a| settings.applies(a) && shown(a));
     applies.map(|&a| format!("{}={}", a.key(), settings.get(a))).collect::<Vec<_>>().join(" ")
 }
 
@@ -69,22 +86,23 @@ fn describe(settings: &Settings) -> String {
 pub fn run(args: &RenderArgs) -> Result<(), Error> {
     let settings = settings_of(&args.set)?;
     let backend = backend::of(settings.accel);
-    backend.available(&settings).map_err(|e| Error::Input(format!("--set accel={}: {e}", settings.accel.name())))?;
+    let refused = |e: backend::Unavailable| Error::Input(format!("--set accel={}: {e}", settings.accel.name()));
+    backend::accel_support(&settings).map_err(refused)?;
+    backend.available(&settings).map_err(refused)?;
     let file = scene_file(&settings, args)?;
-    if settings.scene.is_triangles() {
-        let scene = settings.scene.name();
-        return Err(Error::Input(format!("--set scene={scene}: harness render draws sphere scenes only")));
-    }
+    load_mesh(&settings)?;
     let setup = Setup::start(&settings)?;
     let t0 = Instant::now();
     let scene = make_scene(&settings, file.as_ref());
-    let Some(spheres) = scene.spheres() else { unreachable!("sphere scenes only") };
+    // A triangle scene's triangles for their normals: every backend's hits name triangles by their mesh index.
+    let triangles = scene.triangles();
     let scene_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let built = setup.install(|| backend.build(&settings, &scene.geometry(), &setup))?;
     let build_s = t1.elapsed().as_secs_f64();
+    let shaded = Some(scene.shaded(&triangles));
     let t2 = Instant::now();
-    let output = setup.install(|| built.structure.run(Work::new(Some(spheres), &settings, None)));
+    let output = setup.install(|| built.structure.run(Work::new(shaded, &settings, None)));
     let render_s = t2.elapsed().as_secs_f64();
     let Output::Image(image) = output else { unreachable!("the render workload draws an image") };
 
@@ -97,7 +115,11 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
     let encode_s = t3.elapsed().as_secs_f64();
 
     let stats = built.structure.stats();
-    say!("scene        {} spheres, fingerprint {:016x}", spheres.spheres.len(), scene.fingerprint());
+    let (count, what) = match &scene {
+        SceneData::Spheres(s) => (s.spheres.len(), "spheres"),
+        SceneData::Triangles(t) => (t.mesh.triangle_count(), "triangles"),
+    };
+    say!("scene        {count} {what}, fingerprint {:016x}", scene.fingerprint());
     say!("settings     {}", describe(&settings));
     say!("backend      {}: kernel {}, {}", backend.name(), built.simd_kernel, built.peer_info);
     say!("strategy     {}", settings.strategy());
@@ -111,10 +133,11 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
     );
     say!("time         scene {scene_s:.4} s, build {build_s:.4} s, render {render_s:.4} s, encode {encode_s:.4} s");
     if args.count {
-        let (_, c) = setup.install(|| built.structure.run_counted(Work::new(Some(spheres), &settings, None)));
+        let (_, c) = setup.install(|| built.structure.run_counted(Work::new(shaded, &settings, None)));
         let (nodes, boxes, prims) = c.per_ray();
+        let prim = if triangles.is_empty() { "sphere" } else { "triangle" };
         say!("rays         {} ({:.2} Mrays/s)", c.rays, c.rays as f64 / render_s / 1e6);
-        say!("per ray      {nodes:.2} nodes, {boxes:.2} box tests, {prims:.2} sphere tests (peers count none)");
+        say!("per ray      {nodes:.2} nodes, {boxes:.2} box tests, {prims:.2} {prim} tests (peers count none)");
     }
     say!("image        {}×{} hash {:016x} -> {}", image.width, image.height, image.hash(), args.out.display());
     Ok(())

@@ -788,3 +788,64 @@ fn quick_triangle_scenes_experiment_validates_every_configuration() {
     let scenes: std::collections::HashSet<_> = rows.iter().map(|r| r.scene_fingerprint.clone()).collect();
     assert_eq!(scenes.len(), 2, "one fingerprint per scene");
 }
+
+/// `render` draws triangle scenes, flat-shaded, with every backend that builds on triangles: our structures (both
+/// triangle tests) and the peers draw the same image, and it is not all sky. A backend that cannot build the scene, a
+/// mesh scene without its mesh and a data set not fetched are one line, exit 2, nothing written.
+#[test]
+fn render_draws_triangle_scenes_with_every_backend() {
+    let dir = temp("render-triangles");
+    let render = |sets: &[&str], out: &str| {
+        let mut cmd = harness();
+        cmd.env("BVHLAB_DATA", dir.join("no-data")).args(["render", "--count"]);
+        for s in sets {
+            cmd.args(["--set", s]);
+        }
+        cmd.args(["--out", dir.join(out).to_str().unwrap()]).output().unwrap()
+    };
+    let hash = |o: &Output| {
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        text.lines().find_map(|l| l.split(" hash ").nth(1)).map(|h| h[..16].to_string()).unwrap_or_default()
+    };
+    for (scene, count) in [("scene=tessellated-spheres", "4480 triangles"), ("scene=random-triangles", "20 triangles")]
+    {
+        let base = [scene, "objects=20", "width=48", "height=32"];
+        let mut hashes = HashSet::new();
+        for (i, sets) in [
+            &["accel=list"][..],
+            &["accel=bvh", "triangle_test=moller-trumbore"],
+            &["accel=flat-bvh", "strategy=rayon-bands", "threads=2"],
+            &["accel=wide-bvh", "node_width=4", "leaf_block=16", "triangle_test=moller-trumbore"],
+            &["accel=wide-bvh"],
+            &["accel=obvhs-bvh2"],
+            &["accel=obvhs-cwbvh"],
+        ]
+        .iter()
+        .enumerate()
+        {
+            let out = format!("t{i}.png");
+            let o = render(&[&base[..], sets].concat(), &out);
+            assert!(o.status.success(), "{scene} {sets:?}: {}", stderr(&o));
+            let text = String::from_utf8_lossy(&o.stdout);
+            assert!(text.contains(count) && text.contains("triangle tests"), "{text}");
+            let png = std::fs::read(dir.join(&out)).unwrap();
+            assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{sets:?} wrote a PNG");
+            hashes.insert(hash(&o));
+        }
+        assert_eq!(hashes.len(), 1, "{scene}: every structure and triangle test draws the same image: {hashes:?}");
+        let sky = render(&[&base[..], &["accel=null"]].concat(), "sky.png");
+        assert!(sky.status.success(), "{}", stderr(&sky));
+        assert!(!hashes.contains(&hash(&sky)), "{scene}: the image is not all sky");
+    }
+    for (sets, want) in [
+        (&["accel=tinybvh"][..], "--set accel=tinybvh: tinybvh traces triangles only"),
+        (&["scene=mesh"], "--set scene=mesh needs --set mesh=NAME"),
+        (&["scene=mesh", "mesh=bunny"], "harness fetch bunny"),
+    ] {
+        let o = render(sets, "bad.png");
+        assert_eq!(o.status.code(), Some(2), "{sets:?}: {}", stderr(&o));
+        assert_eq!(stderr(&o).trim_end().lines().count(), 1, "{sets:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(want), "{sets:?}: expected {want:?} in {}", stderr(&o));
+        assert!(!dir.join("bad.png").exists(), "{sets:?}: nothing written");
+    }
+}

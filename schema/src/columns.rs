@@ -96,8 +96,9 @@ declare_columns! {
         /// Ray–triangle test of the tracer's structures on triangle scenes (peers run their own).
         triangle_test: Option<TriangleTest> = Some(TriangleTest::Watertight), applies ours_on_triangles else None,
             added 7;
-        /// Camera of triangle scenes, computed from the mesh's bounds: `overview` (from outside, the whole model in
-        /// frame) or `street` (low inside the model's box, looking along the ground; for cities).
+        /// Camera of triangle scenes, computed from the mesh: `overview` (from outside, the whole model in frame) or
+        /// `street` (for cities: at eye height on open ground, looking level along the longest line of sight; a
+        /// model without open ground is seen from outside at its floor's height).
         view: Option<View> = Some(View::Overview), applies triangle_scene else None, added 7;
         /// tinybvh's layout: `bvh` (binary), `bvh4-cpu` or `bvh8-cpu` (wide).
         tinybvh_layout: Option<TinyBvhLayout> = Some(TinyBvhLayout::Bvh), applies tinybvh else None, added 7;

@@ -70,17 +70,24 @@ pub enum Geometry<'a> {
     Triangles(&'a Mesh),
 }
 
-/// Whether `settings`' backend and workload can run on its scene kind: the render workload shades spheres only,
-/// and tinybvh traces triangles only (nothing installed changes either).
+/// Whether `settings`' backend and workload can run on its scene kind: the render workload of timed runs shades
+/// spheres only (`harness render` draws triangle scenes too), and tinybvh traces triangles only (nothing installed
+/// changes either).
 pub fn scene_support(settings: &Settings) -> Result<(), Unavailable> {
-    let why = if settings.scene.is_triangles() && settings.workload == Workload::Render {
-        "the render workload shades sphere scenes only (triangle scenes run the ray sets)"
-    } else if !settings.scene.is_triangles() && settings.accel == Accel::Peer(PeerKind::TinyBvh) {
-        "tinybvh traces triangles only (sphere scenes have no tinybvh structure)"
-    } else {
-        return Ok(());
-    };
-    Err(Unavailable { reason: why.into(), installable: false })
+    if settings.scene.is_triangles() && settings.workload == Workload::Render {
+        let why = "the render workload shades sphere scenes only (triangle scenes run the ray sets)";
+        return Err(Unavailable { reason: why.into(), installable: false });
+    }
+    accel_support(settings)
+}
+
+/// Whether `settings`' backend builds on its scene kind: tinybvh traces triangles only.
+pub fn accel_support(settings: &Settings) -> Result<(), Unavailable> {
+    if !settings.scene.is_triangles() && settings.accel == Accel::Peer(PeerKind::TinyBvh) {
+        let why = "tinybvh traces triangles only (sphere scenes have no tinybvh structure)";
+        return Err(Unavailable { reason: why.into(), installable: false });
+    }
+    Ok(())
 }
 
 /// Why a backend (or one of its settings) cannot run here.

@@ -4,9 +4,10 @@
 use schema::{Settings, Workload};
 use tracer::accel::{AccelVisitor, Accelerator};
 use tracer::counters::Counters;
+use tracer::geometry::WatertightTriangle;
 use tracer::rays::{RayAnswers, RaySet, trace};
-use tracer::render::{RenderSettings, render};
-use tracer::scene::Scene;
+use tracer::render::{RenderSettings, render, render_mesh};
+use tracer::scene::{MeshScene, Scene};
 
 /// What a workload produced: the rendered image or the ray set's answers. Hashed only after the trace phase's
 /// clock has stopped (hashing every answer is not the backend's work: it cost ~8 ns per ray, more than the whole
@@ -26,17 +27,27 @@ impl Output {
     }
 }
 
+/// What a render draws.
+#[derive(Clone, Copy)]
+pub enum Shaded<'a> {
+    /// A sphere scene, Whitted-shaded.
+    Spheres(&'a Scene),
+    /// A triangle scene, flat-shaded: its camera and light, and its triangles in mesh order for their normals (a
+    /// structure's hits name them by index, whatever its triangle test).
+    Triangles(&'a MeshScene, &'a [WatertightTriangle]),
+}
+
 /// Runs the workload with counters `C`: its output and the counters.
 pub struct Work<'a, C> {
-    /// The sphere scene of a render (ray sets need none).
-    scene: Option<&'a Scene>,
+    /// The scene of a render (ray sets need none).
+    scene: Option<Shaded<'a>>,
     settings: &'a Settings,
     rays: Option<&'a RaySet>,
     _c: std::marker::PhantomData<C>,
 }
 
 impl<'a, C> Work<'a, C> {
-    pub fn new(scene: Option<&'a Scene>, settings: &'a Settings, rays: Option<&'a RaySet>) -> Self {
+    pub fn new(scene: Option<Shaded<'a>>, settings: &'a Settings, rays: Option<&'a RaySet>) -> Self {
         Self { scene, settings, rays, _c: std::marker::PhantomData }
     }
 }
@@ -47,10 +58,14 @@ impl<C: Counters> AccelVisitor for Work<'_, C> {
         let s = self.settings;
         match s.workload {
             Workload::Render => {
-                let scene = self.scene.expect("renders are of sphere scenes");
-                let (image, c) = bvhlab_phase_trace(|| {
-                    render::<_, C>(scene, accel, &RenderSettings { max_depth: s.max_depth }, &s.strategy())
-                });
+                let (image, c) = match self.scene.expect("renders come with their scene") {
+                    Shaded::Spheres(scene) => bvhlab_phase_trace(|| {
+                        render::<_, C>(scene, accel, &RenderSettings { max_depth: s.max_depth }, &s.strategy())
+                    }),
+                    Shaded::Triangles(scene, triangles) => bvhlab_phase_trace(|| {
+                        render_mesh::<_, _, C>(triangles, &scene.camera, scene.light, accel, &s.strategy())
+                    }),
+                };
                 (Output::Image(image), c)
             }
             Workload::Rays(_) => {

@@ -8,10 +8,11 @@ use schema::Settings;
 use serde::{Deserialize, Serialize};
 use tracer::accel::{Null, TreeStats};
 use tracer::counters::{NoCounters, WorkCounters};
+use tracer::geometry::{TrianglePrimitive, WatertightTriangle};
 use tracer::rays::{RayAnswers, RaySet, trace};
 use tracer::scene::{MeshScene, Scene, SceneKind, random_triangles, tessellate};
 
-use crate::backend::workload::{Output, Work, bvhlab_phase_build};
+use crate::backend::workload::{Output, Shaded, Work, bvhlab_phase_build};
 use crate::backend::{self, Geometry, Setup};
 use crate::error::Error;
 
@@ -86,11 +87,27 @@ impl SceneData {
         }
     }
 
-    /// The sphere scene (renders need one).
+    /// The sphere scene (the render workload of timed runs needs one).
     pub fn spheres(&self) -> Option<&Scene> {
         match self {
             SceneData::Spheres(s) => Some(s),
             SceneData::Triangles(_) => None,
+        }
+    }
+
+    /// What a render draws; a triangle scene's triangles come from [`SceneData::triangles`].
+    pub fn shaded<'a>(&'a self, triangles: &'a [WatertightTriangle]) -> Shaded<'a> {
+        match self {
+            SceneData::Spheres(s) => Shaded::Spheres(s),
+            SceneData::Triangles(t) => Shaded::Triangles(t, triangles),
+        }
+    }
+
+    /// A triangle scene's triangles in mesh order, for their normals (empty for spheres).
+    pub fn triangles(&self) -> Vec<WatertightTriangle> {
+        match self {
+            SceneData::Spheres(_) => Vec::new(),
+            SceneData::Triangles(t) => WatertightTriangle::all(t.mesh.triangles()),
         }
     }
 
@@ -164,7 +181,7 @@ pub fn timed(settings: &Settings, file: Option<&Scene>, rays: Option<&RaySet>, s
     };
     let build_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let output = setup.install(|| built.structure.run(Work::new(scene.spheres(), settings, rays)));
+    let output = setup.install(|| built.structure.run(Work::new(scene.spheres().map(Shaded::Spheres), settings, rays)));
     let trace_s = t.elapsed().as_secs_f64();
     let encode_s = match &output {
         Output::Image(image) => encode_seconds(image),
@@ -206,7 +223,8 @@ pub fn counted(
     let scene = make_scene(settings, file);
     let setup = Setup::start(settings)?;
     let built = backend::of(settings.accel).build(settings, &scene.geometry(), &setup)?;
-    let (output, c) = setup.install(|| built.structure.run_counted(Work::new(scene.spheres(), settings, rays)));
+    let (output, c) =
+        setup.install(|| built.structure.run_counted(Work::new(scene.spheres().map(Shaded::Spheres), settings, rays)));
     let hash = output.hash();
     let answers = match (output, rays, answer_rays) {
         (_, _, None) => None,

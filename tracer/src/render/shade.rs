@@ -31,7 +31,12 @@ struct Shader<'a, A> {
 }
 
 fn sky(dir: Vec3) -> Vec3 {
-    let t = 0.5 * (dir.y + 1.0);
+    sky_at(dir.y)
+}
+
+/// The sky gradient at `height`, a unit direction's component along up: white straight down, blue straight up.
+pub(super) fn sky_at(height: f32) -> Vec3 {
+    let t = 0.5 * (height + 1.0);
     Vec3::ONE * (1.0 - t) + Vec3::new(0.5, 0.7, 1.0) * t
 }
 
@@ -91,7 +96,7 @@ impl<A: Accelerator> Shader<'_, A> {
     }
 }
 
-fn to_srgb8(c: Vec3) -> [u8; 3] {
+pub(super) fn to_srgb8(c: Vec3) -> [u8; 3] {
     let c = c.clamp(Vec3::ZERO, Vec3::ONE);
     [c.x, c.y, c.z].map(|v| (v.sqrt() * 255.0 + 0.5) as u8)
 }
