@@ -730,18 +730,8 @@ fn a_closed_stdout_ends_every_printing_command_quietly() {
 #[test]
 fn render_takes_schema_settings_and_refuses_bad_ones() {
     let dir = temp("render");
-    let render = |sets: &[&str], out: &str| {
-        let mut cmd = harness();
-        cmd.arg("render");
-        for s in sets {
-            cmd.args(["--set", s]);
-        }
-        cmd.args(["--out", dir.join(out).to_str().unwrap()]).output().unwrap()
-    };
-    let hash = |o: &Output| {
-        let text = String::from_utf8_lossy(&o.stdout).into_owned();
-        text.lines().find_map(|l| l.split(" hash ").nth(1)).map(|h| h[..16].to_string()).unwrap_or_default()
-    };
+    let render = |sets: &[&str], out: &str| render_command(&[], sets, &dir.join(out)).output().unwrap();
+    let hash = printed_hash;
     let base = ["objects=300", "width=48", "height=32"];
     let flat = render(&base, "flat.png");
     assert!(flat.status.success(), "{}", stderr(&flat));
@@ -760,16 +750,38 @@ fn render_takes_schema_settings_and_refuses_bad_ones() {
         ("accel=kd-tree", "--set accel: "),
         ("objects", "--set objects: expected KEY=VALUE"),
     ] {
-        let o = render(&[set], "bad.png");
-        assert_eq!(o.status.code(), Some(2), "{set}: {}", stderr(&o));
-        assert_eq!(stderr(&o).trim_end().lines().count(), 1, "{set}: {}", stderr(&o));
-        assert!(stderr(&o).contains(want), "{set}: expected {want:?} in {}", stderr(&o));
-        assert!(!dir.join("bad.png").exists(), "{set}: nothing written");
+        assert_refused(&render(&[set], "bad.png"), want, &dir.join("bad.png"), set);
     }
 }
 
-/// `experiments/triangle-scenes.toml --quick`: procedural triangle scenes, every backend this machine has (Embree's single
-/// rays and packets, obvhs, tinybvh, ours with both triangle tests), every ray kind, each validated exact.
+/// `harness render ARGS --set S… --out OUT`.
+fn render_command(args: &[&str], sets: &[&str], out: &Path) -> Command {
+    let mut cmd = harness();
+    cmd.arg("render").args(args);
+    for s in sets {
+        cmd.args(["--set", s]);
+    }
+    cmd.args(["--out", out.to_str().unwrap()]);
+    cmd
+}
+
+/// The 16 hex digits of the image hash `harness render` printed (empty when it printed none).
+fn printed_hash(o: &Output) -> String {
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    text.lines().find_map(|l| l.split(" hash ").nth(1)).map(|h| h[..16].to_string()).unwrap_or_default()
+}
+
+/// Asserts that `o` (`what`) exited 2 with one line naming `want` and wrote nothing at `out`.
+#[track_caller]
+fn assert_refused(o: &Output, want: &str, out: &Path, what: &str) {
+    assert_eq!(o.status.code(), Some(2), "{what}: {}", stderr(o));
+    assert_eq!(stderr(o).trim_end().lines().count(), 1, "{what}: {}", stderr(o));
+    assert!(stderr(o).contains(want), "{what}: expected {want:?} in {}", stderr(o));
+    assert!(!out.exists(), "{what}: nothing written");
+}
+
+/// `experiments/triangle-scenes.toml --quick`: procedural triangle scenes, every backend this machine has (Embree's
+/// single rays and packets, obvhs, tinybvh, ours with both triangle tests), every ray kind, each validated exact.
 #[test]
 fn quick_triangle_scenes_experiment_validates_every_configuration() {
     let dir = temp("meshes");
@@ -796,17 +808,9 @@ fn quick_triangle_scenes_experiment_validates_every_configuration() {
 fn render_draws_triangle_scenes_with_every_backend() {
     let dir = temp("render-triangles");
     let render = |sets: &[&str], out: &str| {
-        let mut cmd = harness();
-        cmd.env("BVHLAB_DATA", dir.join("no-data")).args(["render", "--count"]);
-        for s in sets {
-            cmd.args(["--set", s]);
-        }
-        cmd.args(["--out", dir.join(out).to_str().unwrap()]).output().unwrap()
+        render_command(&["--count"], sets, &dir.join(out)).env("BVHLAB_DATA", dir.join("no-data")).output().unwrap()
     };
-    let hash = |o: &Output| {
-        let text = String::from_utf8_lossy(&o.stdout).into_owned();
-        text.lines().find_map(|l| l.split(" hash ").nth(1)).map(|h| h[..16].to_string()).unwrap_or_default()
-    };
+    let hash = printed_hash;
     for (scene, count) in [("scene=tessellated-spheres", "4480 triangles"), ("scene=random-triangles", "20 triangles")]
     {
         let base = [scene, "objects=20", "width=48", "height=32"];
@@ -842,10 +846,6 @@ fn render_draws_triangle_scenes_with_every_backend() {
         (&["scene=mesh"], "--set scene=mesh needs --set mesh=NAME"),
         (&["scene=mesh", "mesh=bunny"], "harness fetch bunny"),
     ] {
-        let o = render(sets, "bad.png");
-        assert_eq!(o.status.code(), Some(2), "{sets:?}: {}", stderr(&o));
-        assert_eq!(stderr(&o).trim_end().lines().count(), 1, "{sets:?}: {}", stderr(&o));
-        assert!(stderr(&o).contains(want), "{sets:?}: expected {want:?} in {}", stderr(&o));
-        assert!(!dir.join("bad.png").exists(), "{sets:?}: nothing written");
+        assert_refused(&render(sets, "bad.png"), want, &dir.join("bad.png"), &format!("{sets:?}"));
     }
 }

@@ -90,26 +90,23 @@ mod tests {
         for up in [Vec3::Y, Vec3::Z] {
             let scene = scene(up);
             let tris = WatertightTriangle::all(scene.mesh.triangles());
-            let reference = render_mesh::<_, _, WorkCounters>(
-                &tris,
-                &scene.camera,
-                scene.light,
-                &List::build(&tris),
-                &Strategy::SERIAL,
-            );
+            let listed = || {
+                render_mesh::<_, _, WorkCounters>(
+                    &tris,
+                    &scene.camera,
+                    scene.light,
+                    &List::build(&tris),
+                    &Strategy::SERIAL,
+                )
+            };
+            let reference = listed();
             let (image, counters) = &reference;
             let sky = image.pixels.iter().filter(|p| sky_pixel(p)).count();
             assert!(sky > 0 && sky < image.pixels.len(), "some pixels hit, some are sky: {sky}");
             let shades: std::collections::HashSet<_> = image.pixels.iter().filter(|p| !sky_pixel(p)).collect();
             assert!(shades.len() > 10, "lit, shadowed and turned faces differ: {}", shades.len());
             assert!(counters.rays > u64::from(image.width * image.height), "shadow rays are counted");
-            let again = render_mesh::<_, _, WorkCounters>(
-                &tris,
-                &scene.camera,
-                scene.light,
-                &List::build(&tris),
-                &Strategy::SERIAL,
-            );
+            let again = listed();
             assert_eq!(again.0.hash(), image.hash(), "deterministic");
             for kind in [AccelKind::Bvh, AccelKind::FlatBvh, AccelKind::WideBvh] {
                 let params = AccelParams { kind, ..Default::default() };
