@@ -124,6 +124,16 @@ fn bad_configs_exit_2_with_one_line_and_write_nothing() {
             "plot[0].y: unknown metric \"speed\" (allowed: setup_s, scene_s, build_s, trace_s, overhead_s, encode_s, total_s,",
         ),
         (
+            "trade-off plot against a setting",
+            "name = \"t\"\n[sweep]\n[[plot]]\nfile = \"f\"\nkind = \"trade-off\"\nx = \"objects\"\n",
+            "plot[0].x: unknown metric \"objects\" (allowed: setup_s, scene_s, build_s,",
+        ),
+        (
+            "bad plot kind",
+            "name = \"t\"\n[sweep]\n[[plot]]\nfile = \"f\"\nkind = \"scatter\"\n",
+            "plot[0].kind: unknown value \"scatter\" (allowed: metric, speedup, efficiency, trade-off)",
+        ),
+        (
             "bad order",
             "name = \"t\"\norder = \"random\"\n[sweep]\n",
             "order: unknown value \"random\" (allowed: interleaved, sequential, shuffled)",

@@ -136,10 +136,10 @@ fn dry_run_prints_both_scripts_and_writes_nothing() {
     assert!(hash.len() == 16 && hash.chars().all(|c| c.is_ascii_hexdigit()), "{hash}");
     assert!(!run.exists(), "a dry run writes nothing");
     let o = harness()
-        .args(["slurm", "submit", "experiments/ci.toml", "--quick", "--shards", "3", "--dry-run"])
+        .args(["slurm", "submit", "experiments/ci.toml", "--quick", "--shards", "4", "--dry-run"])
         .output()
         .unwrap();
-    refused(&o, &dir, "--shards 3: experiments/ci.toml has only 2 scene cells");
+    refused(&o, &dir, "--shards 4: experiments/ci.toml has only 3 scene cells");
     let o = harness()
         .args(["slurm", "submit", "experiments/ci.toml", "--quick", "--shards", "2", "--no-exclusive", "--dry-run"])
         .output()

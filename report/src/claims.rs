@@ -23,6 +23,25 @@ pub struct ClaimResult {
     pub threshold: f64,
     /// How many points were compared and which was least favourable.
     pub detail: String,
+    /// Every point compared, in the order of the rows.
+    pub points: Vec<PointResult>,
+}
+
+/// One point of a claim: its settings, ratio and own verdict.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointResult {
+    /// The settings that name the point (e.g. `mesh bunny, view street, workload diffuse`).
+    pub label: String,
+    /// Ratio `metric(than) / metric(series)` there.
+    pub ratio: f64,
+    /// Lower end of its 95% interval.
+    pub lo: f64,
+    /// Upper end of its 95% interval.
+    pub hi: f64,
+    /// The factor the ratio must reach there, or the tolerance.
+    pub threshold: f64,
+    /// Holds, fails or inconclusive at this point.
+    pub verdict: Verdict,
 }
 
 /// Checks every claim of `spec` against the rows.
@@ -50,6 +69,19 @@ pub fn check(rows: &Rows, spec: &ReportSpec, claim: &ClaimSpec) -> ClaimResult {
         hi: estimate.hi,
         threshold: judged[worst].threshold,
         detail: describe(&judged, &labels[worst]),
+        points: points
+            .iter()
+            .zip(&judged)
+            .zip(labels)
+            .map(|((p, j), label)| PointResult {
+                label,
+                ratio: p.estimate.value,
+                lo: p.estimate.lo,
+                hi: p.estimate.hi,
+                threshold: j.threshold,
+                verdict: j.verdict,
+            })
+            .collect(),
     }
 }
 
@@ -111,6 +143,7 @@ fn no_points(claim: &ClaimSpec, series: &str, than: &str) -> ClaimResult {
             claim.metric,
             objects_range(claim)
         ),
+        points: Vec::new(),
     }
 }
 

@@ -336,6 +336,40 @@ fn claims_table(md: &mut String, spec: &ReportSpec, claims: &[ClaimResult]) {
         );
     }
     md.push_str("\nRatios are `metric(than) / metric(series)` per object count, pooled over seeds.\n\n");
+    claim_points(md, spec, claims);
+}
+
+/// Every point of each claim compared at more than one point: where it holds and where it does not.
+fn claim_points(md: &mut String, spec: &ReportSpec, claims: &[ClaimResult]) {
+    let several: Vec<_> = spec.claims.iter().zip(claims).filter(|(_, c)| c.points.len() > 1).collect();
+    if several.is_empty() {
+        return;
+    }
+    md.push_str("### Claims point by point\n\n");
+    for (spec, claim) in several {
+        let _ = writeln!(md, "**{}**\n", claim.text.replace('\n', " "));
+        md.push_str("| point | ratio [95% CI] | threshold | verdict |\n|---|---|---|---|\n");
+        for p in &claim.points {
+            let verdict = match p.verdict {
+                Verdict::Holds => "holds",
+                Verdict::Fails => "**fails**",
+                Verdict::Inconclusive => "inconclusive",
+            };
+            let threshold = match spec.kind {
+                ClaimKind::Faster { .. } => format!("≥ {}", compact(p.threshold)),
+                ClaimKind::Within { .. } => format!("1 ± {}", compact(p.threshold)),
+            };
+            let _ = writeln!(
+                md,
+                "| {} | {} [{}, {}] | {threshold} | {verdict} |",
+                cell(&p.label),
+                num(p.ratio),
+                num(p.lo),
+                num(p.hi),
+            );
+        }
+        md.push('\n');
+    }
 }
 
 fn summary_table(md: &mut String, rows: &Rows, spec: &ReportSpec) {

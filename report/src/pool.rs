@@ -152,6 +152,26 @@ pub fn metric_curves(runs: &[Run], series: &str, x: &str, metric: &str) -> Vec<C
     })
 }
 
+/// One point per setting combination of `series` (seeds pooled): the median of metric `x` against the median and
+/// 95% interval of metric `y` (the trade-off of two metrics, e.g. build time against trace time).
+pub fn trade_off_curves(runs: &[Run], series: &str, x: &str, y: &str) -> Vec<Curve> {
+    curves_of(runs, series, column::seed)
+        .into_iter()
+        .filter_map(|(fixed, groups)| {
+            let group: Vec<&Run> = groups.into_iter().flat_map(|(_, g)| g).collect();
+            let (xs, ys) = (samples(group.iter().copied(), x), samples(group.iter().copied(), y));
+            if xs.is_empty() || ys.is_empty() {
+                return None;
+            }
+            let key = format!("{series}|{fixed}|{x}|{y}");
+            let x_median = stats::median_ci(&xs, stats::seed_for(&key)).value;
+            let estimate = stats::median_ci(&ys, stats::seed_for(&key));
+            let point = Point { x: x_median, estimate, threads: max_threads(&group), reference_threads: f64::NAN };
+            Some(Curve { fixed, points: vec![point] })
+        })
+        .collect()
+}
+
 /// Curves of `metric(other) / metric(series)` against `x`, each point pooled over seeds; `other`'s
 /// samples at a point are the counterparts (see [`matches`]) of the series' runs there, seeds ignored.
 pub fn ratio_curves(spec: &ReportSpec, runs: &[Run], other: &str, series: &str, x: &str, metric: &str) -> Vec<Curve> {
@@ -179,4 +199,32 @@ pub fn seed_pools(runs: &[Run]) -> Vec<Vec<&Run>> {
         }
     }
     pools.into_iter().map(|(_, group)| group).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The golden rows (two series, 10 and 100 objects, two seeds, three repetitions each).
+    fn golden() -> Vec<Run> {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/runs.csv");
+        crate::rows::read(&path).unwrap().runs
+    }
+
+    #[test]
+    fn trade_off_points_are_the_medians_of_both_metrics_per_setting() {
+        let runs = golden();
+        let series = runs[0].series().to_string();
+        let curves = trade_off_curves(&runs, &series, column::trace_s, column::total_s);
+        let by_objects = |metric| metric_curves(&runs, &series, column::objects, metric).remove(0).points;
+        let (trace, total) = (by_objects(column::trace_s), by_objects(column::total_s));
+        assert_eq!(curves.len(), trace.len(), "one point per object count, seeds pooled");
+        for (curve, (t, s)) in curves.iter().zip(trace.iter().zip(&total)) {
+            assert_eq!(curve.fixed, format!("objects {}", t.x));
+            let [p] = curve.points.as_slice() else { panic!("one point per curve: {curve:?}") };
+            assert_eq!((p.x, p.estimate.value), (t.estimate.value, s.estimate.value));
+            assert!(p.estimate.lo <= p.estimate.value && p.estimate.value <= p.estimate.hi);
+        }
+        assert!(trade_off_curves(&runs, "no such series", column::trace_s, column::total_s).is_empty());
+    }
 }

@@ -55,6 +55,9 @@ pub enum PlotKind {
     Speedup,
     /// Speedup against the reference divided by thread count (parallel efficiency), x = threads.
     Efficiency,
+    /// One point per series and setting combination: metric `x` (e.g. `build_s`) against metric `y` (e.g.
+    /// `trace_s`), medians, with `y`'s 95% interval: what a faster build costs in trace time.
+    TradeOff,
 }
 
 /// One `[[plot]]` table.
@@ -66,7 +69,7 @@ pub struct PlotSpec {
     pub title: String,
     /// What the y axis shows.
     pub kind: PlotKind,
-    /// Setting column on the x axis (e.g. `objects`, `threads`).
+    /// Setting column on the x axis (e.g. `objects`, `threads`); a metric column for [`PlotKind::TradeOff`].
     pub x: String,
     /// Metric column (e.g. `total_s`, `mrays_per_s`).
     pub y: String,

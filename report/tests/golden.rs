@@ -148,6 +148,11 @@ fn golden_report() {
     let holds = &outcome.claims[0];
     assert_eq!(holds.threshold, 2.0, "factor × 1 thread");
     assert!(holds.lo >= 2.0 && holds.detail.starts_with("2 points"), "{holds:?}");
+    // Each point on its own: 10 and 100 objects, both holding, the least favourable one the claim's ratio.
+    let labels: Vec<&str> = holds.points.iter().map(|p| p.label.as_str()).collect();
+    assert_eq!(labels, ["10 objects", "100 objects"], "{holds:?}");
+    assert!(holds.points.iter().all(|p| p.verdict == Holds && p.lo >= 2.0 && p.threshold == 2.0));
+    assert!(holds.points.iter().any(|p| (p.ratio, p.lo, p.hi) == (holds.ratio, holds.lo, holds.hi)));
     assert!(outcome.claims[1].hi < 100.0);
     let straddles = &outcome.claims[2];
     // Pooled over seeds at 100 objects: list median 11.5, bvh median 2.75.
@@ -195,6 +200,9 @@ fn golden_report() {
         "| 1 ± 0.1 | **fails** |",
         "**fails**",
         "| inconclusive |",
+        "### Claims point by point\n\n**BVH is at least 2× faster than the list**\n\n| point | ratio [95% CI] | threshold | verdict |",
+        "| 100 objects | 4.182 [3.427, 5.111] | ≥ 2 | holds |",
+        "| 10 objects | 4.000 [3.077, 5.333] | 1 ± 0.1 | **fails** |",
         "## Summary",
         "```toml\nname = \"golden\"",
         "harness report <dir>",

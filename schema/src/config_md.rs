@@ -18,7 +18,7 @@ const TABLES: &str = "\
 | `[[series]]` | `label` and the settings it fixes; each series runs the sweep's product |
 | `[[exclude]]` | settings (and/or `series`) whose every match is skipped |
 | `[quick]` | overrides for `--quick`: repetitions (and the auto keys), warmups, settings |
-| `[[plot]]` | `file`, `title`, `kind` (`metric`, `speedup`, `efficiency`), `x`, `y` (a metric), `log_x`, `log_y`, `series`, `where` |
+| `[[plot]]` | `file`, `title`, `kind` (`metric`, `speedup`, `efficiency`, `trade-off`: metric `x` against metric `y`, one point per series), `x`, `y` (a metric), `log_x`, `log_y`, `series`, `where` |
 | `[[claim]]` | `text`, `paper`, `kind` (`faster` with `factor` and `per_thread`, or `within` with `tolerance`), `series`, `than`, `metric`, `min_objects`, `max_objects`, `where` |
 ";
 

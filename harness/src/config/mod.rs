@@ -412,7 +412,12 @@ fn parse_repetitions(s: &Section<'_>) -> Result<Option<Repetitions>, Error> {
 
 /// A metric key (`y` of a plot, `metric` of a claim), `total_s` when absent.
 fn metric(s: &Section<'_>, key: &str) -> Result<String, Error> {
-    let m = s.string(key)?.unwrap_or(schema::column::total_s).to_string();
+    metric_or(s, key, schema::column::total_s)
+}
+
+/// A metric key, `default` when absent.
+fn metric_or(s: &Section<'_>, key: &str, default: &str) -> Result<String, Error> {
+    let m = s.string(key)?.unwrap_or(default).to_string();
     if !metrics().contains(&m.as_str()) {
         return Err(s.error(key, format!("unknown metric {m:?} (allowed: {})", metrics().join(", "))));
     }
@@ -428,16 +433,26 @@ fn parse_plot(p: &Section<'_>, labels: &Labels, has_reference: bool) -> Result<P
         None | Some("metric") => PlotKind::Metric,
         Some("speedup") => PlotKind::Speedup,
         Some("efficiency") => PlotKind::Efficiency,
-        Some(k) => return Err(p.error("kind", format!("unknown value {k:?} (allowed: metric, speedup, efficiency)"))),
+        Some("trade-off") => PlotKind::TradeOff,
+        Some(k) => {
+            return Err(
+                p.error("kind", format!("unknown value {k:?} (allowed: metric, speedup, efficiency, trade-off)"))
+            );
+        }
     };
-    if kind != PlotKind::Metric && !has_reference {
+    if matches!(kind, PlotKind::Speedup | PlotKind::Efficiency) && !has_reference {
         return Err(p.error("kind", "speedup and efficiency plots need a top-level `reference` series"));
     }
-    let default_x = if kind == PlotKind::Efficiency { Axis::threads } else { Axis::objects };
-    let x = p.string("x")?.unwrap_or(default_x.key()).to_string();
-    if Axis::from_key(&x).is_none() {
-        return Err(p.error("x", format!("unknown column {x:?} (allowed: {})", axis_keys())));
-    }
+    let x = if kind == PlotKind::TradeOff {
+        metric_or(p, "x", schema::column::build_s)?
+    } else {
+        let default_x = if kind == PlotKind::Efficiency { Axis::threads } else { Axis::objects };
+        let x = p.string("x")?.unwrap_or(default_x.key()).to_string();
+        if Axis::from_key(&x).is_none() {
+            return Err(p.error("x", format!("unknown column {x:?} (allowed: {})", axis_keys())));
+        }
+        x
+    };
     let series = p.strings("series")?.unwrap_or_default();
     for l in &series {
         labels.check(p, "series", l)?;
@@ -447,7 +462,7 @@ fn parse_plot(p: &Section<'_>, labels: &Labels, has_reference: bool) -> Result<P
         file,
         kind,
         x,
-        y: metric(p, "y")?,
+        y: if kind == PlotKind::TradeOff { metric_or(p, "y", schema::column::trace_s)? } else { metric(p, "y")? },
         log_x: p.boolean("log_x")?.unwrap_or(false),
         log_y: p.boolean("log_y")?.unwrap_or(false),
         series,

@@ -45,6 +45,10 @@ fn chart_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Chart {
         let curves: Vec<Curve> = match (plot.kind, reference) {
             _ if !metric_ok => Vec::new(),
             (PlotKind::Metric, _) => pool::metric_curves(&runs, series, &plot.x, &plot.y),
+            (PlotKind::TradeOff, _) if rows.is_numeric(&plot.x) => {
+                pool::trade_off_curves(&runs, series, &plot.x, &plot.y)
+            }
+            (PlotKind::TradeOff, _) => Vec::new(),
             (_, Some(reference)) if reference == series => Vec::new(),
             (PlotKind::Speedup | PlotKind::Efficiency, Some(reference)) => {
                 pool::ratio_curves(spec, &runs, reference, series, &plot.x, &plot.y)
@@ -73,7 +77,7 @@ fn chart_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Chart {
     }
     let reference = reference.unwrap_or("reference");
     let (y_label, guide) = match plot.kind {
-        PlotKind::Metric => (metric_label(&plot.y), None),
+        PlotKind::Metric | PlotKind::TradeOff => (metric_label(&plot.y), None),
         PlotKind::Speedup if is_time(&plot.y) => {
             (format!("speedup in {} vs {reference} (×)", plot.y), Some((1.0, format!("same as {reference}"))))
         }
@@ -85,7 +89,8 @@ fn chart_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Chart {
         }
     };
     let title = if lines.is_empty() { format!("{} (no data)", plot.title) } else { plot.title.clone() };
-    Chart { title, x_label: axis_label(&plot.x), y_label, log_x: plot.log_x, log_y: plot.log_y, lines, guide }
+    let x_label = if plot.kind == PlotKind::TradeOff { metric_label(&plot.x) } else { axis_label(&plot.x) };
+    Chart { title, x_label, y_label, log_x: plot.log_x, log_y: plot.log_y, lines, guide }
 }
 
 fn is_time(name: &str) -> bool {

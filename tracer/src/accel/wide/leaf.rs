@@ -10,7 +10,7 @@ use glam::Vec3;
 
 #[cfg(target_arch = "x86_64")]
 use super::kernel::lanes::{self, Vf};
-use super::ray::RayLanes;
+use super::ray::{RayLanes, Shear};
 use crate::accel::bvh::split::Referenced;
 use crate::geometry::{MollerTrumboreTriangle, Ray, Sphere, Triangle, WatertightTriangle};
 
@@ -21,6 +21,10 @@ pub const PAD: u32 = u32::MAX;
 pub trait WidePrimitive: Referenced {
     /// Its block of `B` lanes.
     type Block<const B: usize>: LeafBlock<B, Prim = Self>;
+
+    /// Computes what the leaf test reads once per ray into `ray` (nothing, unless the test has per-ray setup).
+    #[inline(always)]
+    fn prepare(_ray: &mut RayLanes) {}
 }
 
 /// `B` primitives laid out for a kernel's leaf test, and their ids in the scene.
@@ -231,6 +235,12 @@ pub struct WatertightBlock<const B: usize> {
 
 impl WidePrimitive for WatertightTriangle {
     type Block<const B: usize> = WatertightBlock<B>;
+
+    /// The ray space's permutation and shear ([`Shear`]), which the SIMD leaf test would otherwise redo per block.
+    #[inline(always)]
+    fn prepare(ray: &mut RayLanes) {
+        ray.shear = Shear::new(Vec3::from_array(ray.dir));
+    }
 }
 
 impl<const B: usize> WatertightBlock<B> {

@@ -107,11 +107,11 @@ impl<const P: usize> Packet<P> {
 
     /// Loads `rays` (1..=P) in place; lanes past them repeat the last ray and are never active.
     #[inline(always)]
-    pub(super) fn load(&mut self, rays: &[Ray]) {
+    pub(super) fn load<Prim: WidePrimitive>(&mut self, rays: &[Ray]) {
         let last = rays.len() - 1;
         for i in 0..P {
             let ray = &rays[i.min(last)];
-            self.lanes[i] = RayLanes::new(ray);
+            self.lanes[i] = RayLanes::for_leaves::<Prim>(ray);
             self.t_max[i] = ray.t_max;
         }
         self.best = [PAD; P];
@@ -415,7 +415,7 @@ impl<C: Counters, A: Answer, const P: usize> Query for Packets<'_, C, A, P> {
         let mut packet = Packet::empty();
         for (rays, out) in self.rays.chunks(P).zip(self.out.chunks_mut(P)) {
             (0..rays.len()).for_each(|_| self.counters.ray());
-            packet.load(rays);
+            packet.load::<Prim>(rays);
             // SAFETY: forwarded from the caller.
             unsafe { A::traverse::<K, C, _, Prim, W, B, P>(tree, &mut packet, Masked, out, self.counters) };
         }

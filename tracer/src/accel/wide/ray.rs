@@ -1,5 +1,6 @@
 //! A ray prepared once for a whole traversal: what every kernel's box and sphere tests read.
 
+use super::leaf::WidePrimitive;
 use crate::geometry::{Ray, RayBoxTester};
 
 /// A ray's origin, direction, reciprocal direction, slab rows and octant, computed once per ray.
@@ -20,6 +21,31 @@ pub struct RayLanes {
     pub a: f32,
     /// Bit `axis` set when the direction is negative on that axis (0..8).
     pub octant: usize,
+    /// The watertight triangle test's ray space, for leaves that read it (see [`WidePrimitive::prepare`]).
+    pub shear: Shear,
+}
+
+/// The permutation and shear of the watertight test's ray space ([`crate::geometry::Triangle::intersect_watertight`]),
+/// computed once per ray by the same operations.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Shear {
+    /// `kx`, `ky`, `kz`: `kz` the direction's dominant axis, `kx` and `ky` swapped when it is negative.
+    pub axes: [usize; 3],
+    /// `Sx = d[kx] / d[kz]`, `Sy = d[ky] / d[kz]`, `Sz = 1 / d[kz]`.
+    pub s: [f32; 3],
+}
+
+impl Shear {
+    /// The ray space of direction `d`.
+    #[inline(always)]
+    pub fn new(d: glam::Vec3) -> Self {
+        let kz = d.abs().max_position();
+        let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        Self { axes: [kx, ky, kz], s: [d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]] }
+    }
 }
 
 impl RayLanes {
@@ -36,7 +62,16 @@ impl RayLanes {
             t_min: ray.t_min,
             a: ray.dir.dot(ray.dir),
             octant: neg[0] | neg[1] << 1 | neg[2] << 2,
+            shear: Shear::default(),
         }
+    }
+
+    /// Prepares `ray` for leaves of `P`: [`RayLanes::new`] and what `P`'s leaf test reads once per ray.
+    #[inline(always)]
+    pub fn for_leaves<P: WidePrimitive>(ray: &Ray) -> Self {
+        let mut r = Self::new(ray);
+        P::prepare(&mut r);
+        r
     }
 }
 

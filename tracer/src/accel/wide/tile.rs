@@ -178,7 +178,7 @@ impl<C: Counters, A: Answer> Query for Tiles<'_, C, A> {
         let packet = &mut Packet::empty();
         for (rays, out) in self.rays.chunks(TILE_RAYS).zip(self.out.chunks_mut(TILE_RAYS)) {
             (0..rays.len()).for_each(|_| self.counters.ray());
-            packet.load(rays);
+            packet.load::<Prim>(rays);
             let frustum = &FrustumLanes::new(&packet.lanes[..rays.len()]);
             let counters = &mut *self.counters;
             // SAFETY (both): forwarded from the caller.

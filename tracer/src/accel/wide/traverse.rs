@@ -140,7 +140,7 @@ pub unsafe fn closest<K: Ops, O: Order, C: Counters, Prim: WidePrimitive, const 
     ray: &Ray,
     counters: &mut C,
 ) -> Option<Hit> {
-    let r = RayLanes::new(ray);
+    let r = RayLanes::for_leaves::<Prim>(ray);
     let mut t_max = ray.t_max;
     let mut best = PAD;
     let mut stack = Stack::new();
@@ -181,7 +181,7 @@ pub unsafe fn any<K: Ops, O: Order, C: Counters, Prim: WidePrimitive, const W: u
     ray: &Ray,
     counters: &mut C,
 ) -> bool {
-    let r = RayLanes::new(ray);
+    let r = RayLanes::for_leaves::<Prim>(ray);
     let mut stack = Stack::new();
     let mut at = Some(ChildRef::ROOT);
     while let Some(child) = at {

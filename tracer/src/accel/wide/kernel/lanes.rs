@@ -471,10 +471,11 @@ pub unsafe fn moller_trumbore<V: Vf, const B: usize>(
 
 /// Distances and hit mask of `V::LANES` triangles from lane `first`:
 /// [`crate::geometry::Triangle::intersect_watertight`], operation for operation; a lane whose edge function rounds
-/// to exactly 0 takes the scalar test (which redoes the edge functions in f64).
+/// to exactly 0 takes the scalar test (which redoes the edge functions in f64). The ray space is `r.shear`, which
+/// [`crate::accel::wide::leaf::WidePrimitive::prepare`] computed by the scalar test's operations.
 ///
 /// # Safety
-/// The CPU supports `V`'s instructions, and `first + V::LANES <= B`.
+/// The CPU supports `V`'s instructions, and `first + V::LANES <= B`; `r` was prepared for watertight leaves.
 #[inline(always)]
 pub unsafe fn watertight<V: Vf, const B: usize>(
     block: &WatertightBlock<B>,
@@ -483,13 +484,8 @@ pub unsafe fn watertight<V: Vf, const B: usize>(
     t_max: f32,
 ) -> (V, V::M) {
     unsafe {
-        let d = glam::Vec3::from_array(r.dir);
-        let kz = d.abs().max_position();
-        let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
-        let (sx, sy, sz) = (V::splat(d[kx] / d[kz]), V::splat(d[ky] / d[kz]), V::splat(1.0 / d[kz]));
+        let [kx, ky, kz] = r.shear.axes;
+        let (sx, sy, sz) = (V::splat(r.shear.s[0]), V::splat(r.shear.s[1]), V::splat(r.shear.s[2]));
         let (ox, oy, oz) = (V::splat(r.origin[kx]), V::splat(r.origin[ky]), V::splat(r.origin[kz]));
         let [p0, p1, p2] = &block.rows;
         // Each vertex relative to the origin on the permuted axes (`p − o`, then indexed), then sheared.
