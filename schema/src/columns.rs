@@ -1,7 +1,7 @@
 //! The declaration: every column of a row, identity first, then the settings (the axes of a sweep), then
 //! the measures. Adding a setting is one entry here (plus the tracer code that uses it).
 
-use tracer::accel::bvh::SahCosts;
+use tracer::accel::bvh::{SahCosts, SpatialAlpha};
 use tracer::accel::wide::{ChildOrdering, Kernel};
 use tracer::accel::{AccelKind, AccelParams, BvhParams, Split, Traversal, WideParams};
 use tracer::executor::{Strategy, StrategyKind};
@@ -41,7 +41,7 @@ declare_columns! {
         /// Largest leaf of the tracer's trees.
         leaf_size: Option<u32> = Some(BvhParams::default().leaf_size),
             range(*BvhParams::LEAF_SIZES.start(), *BvhParams::LEAF_SIZES.end()), applies tree else None, unit "spheres";
-        /// Bins per axis of the binned SAH split.
+        /// Bins per axis of the binned SAH split (and of spatial-sah's object and spatial binning).
         sah_bins: Option<u32> = Some(BvhParams::default().sah_bins),
             range(*BvhParams::SAH_BINS.start(), *BvhParams::SAH_BINS.end()), applies binned_sah else None;
         /// Child visiting order of the tracer's binary trees (the wide BVH has `child_order`).
@@ -104,6 +104,11 @@ declare_columns! {
         tinybvh_layout: Option<TinyBvhLayout> = Some(TinyBvhLayout::Bvh), applies tinybvh else None, added 7;
         /// tinybvh's builder: `default` (binned SAH) or `high` (spatial splits).
         tinybvh_build: Option<TinyBvhQuality> = Some(TinyBvhQuality::Default), applies tinybvh else None, added 7;
+        /// Overlap threshold of `spatial-sah`: a node tries spatial splits where its best object split's children
+        /// overlap by more than this fraction of the root's surface area (0: wherever they overlap, 1: never).
+        spatial_alpha: Option<f32> = Some(BvhParams::default().spatial_alpha.0),
+            range(*BvhParams::SPATIAL_ALPHAS.start(), *BvhParams::SPATIAL_ALPHAS.end()), applies spatial_sah else None,
+            added 9;
     }
     measures {
         /// Wall time of the backend's one-time start-up in the process that times the configuration: thread pool,
@@ -291,9 +296,14 @@ fn embree_packet_ray_set(s: &Settings) -> bool {
     s.accel == Accel::Peer(PeerKind::EmbreePackets) && s.workload != Workload::Render
 }
 
-/// Only the binned SAH split has bins.
+/// Only the binned SAH splits (binned and spatial) have bins.
 fn binned_sah(s: &Settings) -> bool {
-    tree(s) && s.split == Some(Split::BinnedSah)
+    tree(s) && s.split.is_some_and(Split::is_binned)
+}
+
+/// Only spatial splits have an overlap threshold.
+fn spatial_sah(s: &Settings) -> bool {
+    tree(s) && s.split == Some(Split::SpatialSah)
 }
 
 /// Only the SAH splits have cost constants.
@@ -383,6 +393,7 @@ impl Settings {
                 traversal: self.sah_traversal_cost.unwrap_or(default.sah_costs.traversal),
                 intersection: self.sah_intersection_cost.unwrap_or(default.sah_costs.intersection),
             },
+            spatial_alpha: SpatialAlpha(self.spatial_alpha.unwrap_or(default.spatial_alpha.0)),
         };
         let wide_default = WideParams::default();
         let wide = WideParams {

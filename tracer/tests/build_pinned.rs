@@ -47,10 +47,12 @@ fn scenes() -> Vec<(String, Vec<Sphere>)> {
     all
 }
 
-/// Every split × leaf sizes 1, 4, 8; binned SAH also with 2 and 64 bins; the SAH splits also in blocks of 8.
+/// Every split × leaf sizes 1, 4, 8; binned SAH also with 2 and 64 bins; the SAH splits also in blocks of 8. Spatial
+/// splits (added after the recording, built by their own serial builder) are pinned by `tests/spatial.rs`'s
+/// determinism test instead.
 fn cases() -> Vec<(BvhParams, u32)> {
     let mut all = Vec::new();
-    for split in Split::ALL {
+    for split in Split::ALL.into_iter().filter(|&s| s != Split::SpatialSah) {
         for leaf_size in [1, 4, 8] {
             let bins: &[u32] = if split == Split::BinnedSah { &[2, 16, 64] } else { &[16] };
             for &sah_bins in bins {

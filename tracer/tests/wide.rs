@@ -336,7 +336,9 @@ fn stopping_the_binary_build_at_one_block_gives_the_same_wide_tree() {
         SceneKind::ALL.into_iter().map(|kind| (kind.name().to_string(), kind.generate(6000, 3).spheres)).collect();
     scenes.push(("coincident".into(), vec![Sphere::new(Vec3::new(1.0, 2.0, 3.0), 0.5); 100]));
     for (label, spheres) in &scenes {
-        for split in Split::ALL {
+        // Not spatial splits: splitting a node of one block further may duplicate references, so the full tree's
+        // blocks are not the stopped tree's.
+        for split in Split::ALL.into_iter().filter(|&s| s != Split::SpatialSah) {
             for leaf_size in [1, 4, 8, 16] {
                 let bvh = BvhParams { split, leaf_size, ..BvhParams::default() };
                 assert_same_wide_tree::<4, 4>(label, spheres, &bvh);

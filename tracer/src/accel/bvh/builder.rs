@@ -2,7 +2,8 @@
 //!
 //! Nodes come out as sibling pairs in depth-first order: the root at index 0, the two children of an
 //! interior node side by side at `first` and `first + 1`, and a node's whole subtree before its
-//! sibling's. Leaves name a run of `prim_order`.
+//! sibling's. Leaves name a run of `prim_order`. [`Split::SpatialSah`] is built by [`super::spatial`] into the same
+//! layout; only there may `prim_order` name a primitive more than once (in different leaves).
 //!
 //! The build uses the threads of the rayon pool it runs in (outside any pool: rayon's global pool). With more
 //! than one thread, nodes of [`PARALLEL_MIN_PRIMS`] primitives or more build their two children with
@@ -55,7 +56,7 @@ impl FlatNode {
 pub struct BuiltTree<P = Sphere> {
     /// Nodes; the root is `nodes[0]`.
     pub nodes: Vec<FlatNode>,
-    /// Primitive ids in leaf order.
+    /// Primitive ids in leaf order: a permutation, but for spatial splits, which may repeat an id (in other leaves).
     pub prim_order: Vec<u32>,
     /// The primitives of `prim_order`, in the same order (the builder's own copy, read in sequence).
     pub ordered: Vec<P>,
@@ -100,6 +101,9 @@ fn build_with<P: Referenced>(spheres: &[P], params: &BvhParams, block: u32, leaf
     assert!(block >= 1, "a SIMD block holds at least one sphere");
     if let Err(e) = params.validate() {
         panic!("invalid BVH parameters: {e}");
+    }
+    if params.split == Split::SpatialSah {
+        return super::spatial::build(spheres, params, block, leaf_below);
     }
     if spheres.len() >= PARALLEL_MIN_PRIMS && rayon::current_num_threads() > 1 {
         return parallel::build_with(spheres, params, block, leaf_below);
@@ -198,6 +202,7 @@ impl<P: Referenced> Inputs<'_, P> {
                 Split::SweepSah => {
                     (decision, gather) = (sweep_sah::split(&view, prims, self.costs(), &mut scratch.sweep), true)
                 }
+                Split::SpatialSah => unreachable!("spatial splits are built by `spatial::build`"),
             }
         }
         if decision == Decision::NoSplit {

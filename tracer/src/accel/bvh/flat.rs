@@ -60,7 +60,7 @@ impl<P: Referenced> OrderedQueries for FlatBvh<P> {
         let mut best_t = ray.t_max;
         traverse::<_, O, C, _>(self, ray, counters, |node, t_max, counters| {
             let n = self.node(node);
-            // SAFETY: the builder makes every leaf's run lie inside `prims` (one primitive per prim id).
+            // SAFETY: the builder makes every leaf's run lie inside `prims` (one primitive per entry of `prim_ids`).
             let leaf = unsafe { self.prims.get_unchecked(n.first as usize..(n.first + n.prim_count) as usize) };
             for (i, s) in (n.first..).zip(leaf) {
                 counters.prim_test();

@@ -1,7 +1,8 @@
 //! Bounding volume hierarchies: one builder, two layouts, one generic traversal.
 //!
 //! - [`params`]: what a user chooses (leaf size, split rule, traversal order).
-//! - [`builder`]: the shared top-down builder; [`split`] holds one file per split rule, [`sah`] the cost model.
+//! - [`builder`]: the shared top-down builder; [`split`] holds one file per split rule, [`sah`] the cost model;
+//!   [`spatial`]: the builder of [`Split::SpatialSah`] (object and spatial splits, references duplicated).
 //! - [`traverse`]: closest-hit/any-hit traversal, generic over tree layout, child order, counters and leaves,
 //!   and the one dispatch from a tree's [`Traversal`] to the child order compiled for it.
 //! - [`Bvh`] (pointer tree, the paper's) and [`FlatBvh`] (one array) are the layouts.
@@ -11,12 +12,13 @@ pub mod flat;
 pub mod params;
 pub mod pointer;
 pub mod sah;
+pub mod spatial;
 pub mod split;
 pub mod stats;
 pub mod traverse;
 
 pub use flat::FlatBvh;
-pub use params::{BvhParams, ParamError, Split, Traversal};
+pub use params::{BvhParams, ParamError, SpatialAlpha, Split, Traversal};
 pub use pointer::Bvh;
 pub use sah::{CostModel, SahCosts};
 pub use stats::TreeStats;

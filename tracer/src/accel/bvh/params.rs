@@ -1,6 +1,7 @@
 //! The tree parameters a user chooses; serializable so that every recorded run names them.
 
 use std::fmt;
+use std::hash::{Hash, Hasher};
 use std::ops::RangeInclusive;
 
 use serde::{Deserialize, Serialize};
@@ -19,15 +20,23 @@ pub enum Split {
     BinnedSah,
     /// Surface area heuristic over every sorted split position on every axis.
     SweepSah,
+    /// Binned SAH over object and spatial splits (SBVH), duplicating straddling references (see [`super::spatial`]).
+    SpatialSah,
 }
 
 impl Split {
     /// Every rule, in the order tools list them.
-    pub const ALL: [Split; 4] = [Split::CentroidMidpoint, Split::ObjectMedian, Split::BinnedSah, Split::SweepSah];
+    pub const ALL: [Split; 5] =
+        [Split::CentroidMidpoint, Split::ObjectMedian, Split::BinnedSah, Split::SweepSah, Split::SpatialSah];
 
     /// True for the rules that build with the SAH cost model.
     pub fn is_sah(self) -> bool {
-        matches!(self, Split::BinnedSah | Split::SweepSah)
+        matches!(self, Split::BinnedSah | Split::SweepSah | Split::SpatialSah)
+    }
+
+    /// True for the rules that bin with `sah_bins`.
+    pub fn is_binned(self) -> bool {
+        matches!(self, Split::BinnedSah | Split::SpatialSah)
     }
 
     /// The kebab-case name used in configs and on the command line.
@@ -37,6 +46,7 @@ impl Split {
             Split::ObjectMedian => "object-median",
             Split::BinnedSah => "binned-sah",
             Split::SweepSah => "sweep-sah",
+            Split::SpatialSah => "spatial-sah",
         }
     }
 }
@@ -72,12 +82,41 @@ pub struct BvhParams {
     pub leaf_size: u32,
     /// The split rule.
     pub split: Split,
-    /// Bins per axis for [`Split::BinnedSah`], in [`BvhParams::SAH_BINS`].
+    /// Bins per axis for [`Split::BinnedSah`] and [`Split::SpatialSah`] (object and spatial bins), in
+    /// [`BvhParams::SAH_BINS`].
     pub sah_bins: u32,
     /// The child visiting order.
     pub traversal: Traversal,
     /// The cost constants the SAH splits build with (ignored by the other splits).
     pub sah_costs: SahCosts,
+    /// Overlap threshold of [`Split::SpatialSah`], in [`BvhParams::SPATIAL_ALPHAS`] (ignored by the other splits).
+    pub spatial_alpha: SpatialAlpha,
+}
+
+/// [`Split::SpatialSah`]'s threshold: spatial splits are tried where the best object split's children overlap by
+/// more than `alpha` times the root's surface area (Stich et al. 2009's α; 0: wherever they overlap, 1: never).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct SpatialAlpha(pub f32);
+
+impl SpatialAlpha {
+    /// The paper's recommended 1e-5.
+    pub const DEFAULT: SpatialAlpha = SpatialAlpha(1e-5);
+}
+
+impl Default for SpatialAlpha {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+// Alphas are validated finite, so bitwise equality is equality.
+impl Eq for SpatialAlpha {}
+
+impl Hash for SpatialAlpha {
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        self.0.to_bits().hash(state);
+    }
 }
 
 impl Default for BvhParams {
@@ -88,6 +127,7 @@ impl Default for BvhParams {
             sah_bins: 16,
             traversal: Traversal::Fixed,
             sah_costs: SahCosts::UNIT,
+            spatial_alpha: SpatialAlpha::DEFAULT,
         }
     }
 }
@@ -120,6 +160,8 @@ impl BvhParams {
     pub const SAH_BINS: RangeInclusive<u32> = 2..=256;
     /// Allowed SAH cost constants.
     pub const SAH_COSTS: RangeInclusive<f32> = 1e-3..=1e3;
+    /// Allowed `spatial_alpha` values.
+    pub const SPATIAL_ALPHAS: RangeInclusive<f32> = 0.0..=1.0;
 
     /// Checks every range; builders refuse invalid parameters.
     pub fn validate(&self) -> Result<(), ParamError> {
@@ -136,6 +178,11 @@ impl BvhParams {
                 let allowed = format!("{}..={}", Self::SAH_COSTS.start(), Self::SAH_COSTS.end());
                 return Err(ParamError { key, allowed, found: cost.to_string() });
             }
+        }
+        let alpha = self.spatial_alpha.0;
+        if !Self::SPATIAL_ALPHAS.contains(&alpha) {
+            let allowed = format!("{}..={}", Self::SPATIAL_ALPHAS.start(), Self::SPATIAL_ALPHAS.end());
+            return Err(ParamError { key: "spatial_alpha", allowed, found: alpha.to_string() });
         }
         Ok(())
     }

@@ -164,17 +164,45 @@ fn best_plane(
     }
 }
 
-/// Chooses the cheapest plane among `bin_count - 1` per axis, or a leaf when that is cheaper and allowed.
-///
-/// On a split, also returns the two children's bounds.
-pub fn split<R: BuildRef>(
+/// The cheapest plane of a node's binning, with what partitioning by it needs.
+#[derive(Clone, Copy, Debug)]
+pub struct ObjectPlane {
+    /// The split's cost under the build's [`CostModel`].
+    pub cost: f32,
+    axis: usize,
+    first_right: usize,
+    min: Vec3A,
+    scale: Vec3A,
+    last: Vec3A,
+}
+
+impl ObjectPlane {
+    /// True when a primitive of centroid `c` goes to the left child.
+    #[inline(always)]
+    pub fn goes_left(&self, c: Vec3A) -> bool {
+        bin_index(c, self.min, self.scale, self.last)[self.axis] < self.first_right
+    }
+
+    /// The two children's boxes, from the bins `best` left in `scratch`.
+    pub fn sides(&self, scratch: &Bins) -> [Box3A; 2] {
+        let bin_count = scratch.bins.len() / 3;
+        let bins = &scratch.bins[self.axis * bin_count..(self.axis + 1) * bin_count];
+        let mut sides = [Box3A::EMPTY; 2];
+        for (i, bin) in bins.iter().enumerate() {
+            sides[(i >= self.first_right) as usize].add(&bin.bounds);
+        }
+        sides
+    }
+}
+
+/// Bins `refs` and returns the cheapest of the `bin_count - 1` planes per axis (none when no axis has extent).
+pub fn best<R: BuildRef>(
     node: &NodeView<'_>,
-    prims: &mut [u32],
-    refs: &mut [R],
+    refs: &[R],
     bin_count: usize,
     costs: CostModel,
     scratch: &mut Bins,
-) -> (Decision, Option<[NodeBounds; 2]>) {
+) -> Option<ObjectPlane> {
     let cb = node.centroid_bounds;
     let extent = cb.extent();
     let parent_area = node.bounds.surface_area();
@@ -194,23 +222,33 @@ pub fn split<R: BuildRef>(
     let mut best = None;
     for axis in (0..3).filter(|&a| extent[a] > 0.0) {
         let bins = &scratch.bins[axis * bin_count..(axis + 1) * bin_count];
-        best_plane(bins, &mut scratch.right_area, prims.len(), parent_area, costs, axis, &mut best);
+        best_plane(bins, &mut scratch.right_area, refs.len(), parent_area, costs, axis, &mut best);
     }
-    let Some(Candidate { cost, axis, first_right, .. }) = best else {
+    best.map(|Candidate { cost, axis, first_right, .. }| ObjectPlane { cost, axis, first_right, min, scale, last })
+}
+
+/// Chooses the cheapest plane among `bin_count - 1` per axis, or a leaf when that is cheaper and allowed.
+///
+/// On a split, also returns the two children's bounds.
+pub fn split<R: BuildRef>(
+    node: &NodeView<'_>,
+    prims: &mut [u32],
+    refs: &mut [R],
+    bin_count: usize,
+    costs: CostModel,
+    scratch: &mut Bins,
+) -> (Decision, Option<[NodeBounds; 2]>) {
+    let Some(plane) = best(node, refs, bin_count, costs, scratch) else {
         return (if node.may_be_leaf { Decision::Leaf } else { Decision::NoSplit }, None);
     };
-    if node.may_be_leaf && costs.leaf_cost(prims.len()) <= cost {
+    if node.may_be_leaf && costs.leaf_cost(prims.len()) <= plane.cost {
         return (Decision::Leaf, None);
     }
-    let bins = &scratch.bins[axis * bin_count..(axis + 1) * bin_count];
-    let mut sides = [Box3A::EMPTY; 2];
-    for (i, bin) in bins.iter().enumerate() {
-        sides[(i >= first_right) as usize].add(&bin.bounds);
-    }
+    let sides = plane.sides(scratch);
     let mut centroids = [Box3A::EMPTY; 2];
     let n = partition(prims, refs, |r| {
         let c = r.centroid();
-        let left = bin_index(c, min, scale, last)[axis] < first_right;
+        let left = plane.goes_left(c);
         centroids[!left as usize].grow(c);
         left
     });

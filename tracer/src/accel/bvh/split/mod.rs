@@ -2,6 +2,7 @@
 
 pub mod binned_sah;
 pub mod centroid_midpoint;
+pub mod clip;
 pub mod object_median;
 pub mod prim_ref;
 pub mod sweep_sah;

@@ -28,6 +28,19 @@ pub trait Referenced: Primitive {
     fn reference(&self) -> Self::Ref;
     /// The primitive of reference `r`, whose id is `id` in `all`.
     fn from_ref(r: &Self::Ref, all: &[Self], id: u32) -> Self;
+    /// Boxes of the primitive's parts inside `within` below and above the plane `axis = pos` (spatial splits);
+    /// by default `within` cut at the plane (spheres), either may be empty.
+    #[inline]
+    fn halves(&self, within: &Box3A, axis: usize, pos: f32) -> [Box3A; 2] {
+        super::clip::box_halves(within, axis, pos)
+    }
+    /// Calls `part(i, b)` with the box `b` of the primitive's part inside `within` in slab `i` of `axis` (slab 0 below
+    /// `planes[0]`, slab `i` between `planes[i - 1]` and `planes[i]`, the last above the last plane; planes
+    /// ascending), for every slab where that part is not empty (spatial binning).
+    #[inline]
+    fn slab_parts(&self, within: &Box3A, axis: usize, planes: &[f32], part: impl FnMut(usize, Box3A)) {
+        super::clip::box_slab_parts(within, axis, planes, part)
+    }
 }
 
 impl Referenced for Sphere {
@@ -74,6 +87,18 @@ macro_rules! boxed_reference {
             #[inline(always)]
             fn from_ref(_r: &BoxRef, all: &[Self], id: u32) -> Self {
                 all[id as usize]
+            }
+
+            /// The triangle clipped exactly ([`super::clip::triangle_halves`]).
+            #[inline]
+            fn halves(&self, within: &Box3A, axis: usize, pos: f32) -> [Box3A; 2] {
+                super::clip::triangle_halves(&self.0, within, axis, pos)
+            }
+
+            /// The triangle clipped to `within` once, then cut at each plane ([`super::clip::triangle_slab_parts`]).
+            #[inline]
+            fn slab_parts(&self, within: &Box3A, axis: usize, planes: &[f32], part: impl FnMut(usize, Box3A)) {
+                super::clip::triangle_slab_parts(&self.0, within, axis, planes, part)
             }
         }
     )*};
