@@ -2,6 +2,7 @@
 //!
 //! - [`params`]: what a user chooses (leaf size, split rule, traversal order).
 //! - [`builder`]: the shared top-down builder; [`split`] holds one file per split rule, [`sah`] the cost model.
+//! - [`reinsertion`]: the optional post-build pass that moves subtrees to lower the tree's SAH cost.
 //! - [`traverse`]: closest-hit/any-hit traversal, generic over tree layout, child order, counters and leaves,
 //!   and the one dispatch from a tree's [`Traversal`] to the child order compiled for it.
 //! - [`Bvh`] (pointer tree, the paper's) and [`FlatBvh`] (one array) are the layouts.
@@ -10,6 +11,7 @@ pub mod builder;
 pub mod flat;
 pub mod params;
 pub mod pointer;
+pub mod reinsertion;
 pub mod sah;
 pub mod split;
 pub mod stats;
