@@ -551,11 +551,15 @@ mod tests {
         fixes(
             "ours",
             "accel,traversal,obvhs_build,embree_build,embree_isa",
-            "split,leaf_size,sah_bins,strategy,threads,objects",
+            "split,leaf_size,sah_bins,reinsertion,strategy,threads,objects",
         );
-        fixes("o", "accel,split,leaf_size,sah_bins,traversal,embree_build,embree_isa", "obvhs_build,strategy,threads");
+        fixes(
+            "o",
+            "accel,split,leaf_size,sah_bins,reinsertion,traversal,embree_build,embree_isa",
+            "obvhs_build,strategy,threads",
+        );
         let serial_list =
-            "accel,split,leaf_size,sah_bins,traversal,strategy,threads,obvhs_build,embree_build,embree_isa";
+            "accel,split,leaf_size,sah_bins,reinsertion,traversal,strategy,threads,obvhs_build,embree_build,embree_isa";
         fixes("s", serial_list, "objects,seed");
     }
 

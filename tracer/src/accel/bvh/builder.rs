@@ -19,6 +19,7 @@
 use glam::Vec3;
 
 use super::params::{BvhParams, Split};
+use super::reinsertion;
 use super::sah::CostModel;
 use super::split::{self, Decision, NodeBounds, NodeView, Referenced, binned_sah, object_median, prim_ref, sweep_sah};
 use crate::geometry::{Aabb, Sphere};
@@ -96,15 +97,23 @@ pub fn build_for_blocks<P: Referenced>(spheres: &[P], params: &BvhParams, block:
     build_with(spheres, params, block, block as usize)
 }
 
-/// The build of [`build_in_blocks`], with nodes of at most `leaf_below` spheres made leaves without a decision.
+/// The build of [`build_in_blocks`], with nodes of at most `leaf_below` spheres made leaves without a decision, then
+/// `params.reinsertion` rounds of [`reinsertion`].
 fn build_with<P: Referenced>(spheres: &[P], params: &BvhParams, block: u32, leaf_below: usize) -> BuiltTree<P> {
     assert!(block >= 1, "a SIMD block holds at least one sphere");
     if let Err(e) = params.validate() {
         panic!("invalid BVH parameters: {e}");
     }
-    if params.split == Split::SpatialSah {
-        return super::spatial::build(spheres, params, block, leaf_below);
-    }
+    let tree = if params.split == Split::SpatialSah {
+        super::spatial::build(spheres, params, block, leaf_below)
+    } else {
+        build_top_down(spheres, params, block, leaf_below)
+    };
+    reinsertion::optimize(tree, params.reinsertion)
+}
+
+/// The top-down recursion of [`build_with`], serial or parallel.
+fn build_top_down<P: Referenced>(spheres: &[P], params: &BvhParams, block: u32, leaf_below: usize) -> BuiltTree<P> {
     if spheres.len() >= PARALLEL_MIN_PRIMS && rayon::current_num_threads() > 1 {
         return parallel::build_with(spheres, params, block, leaf_below);
     }

@@ -87,6 +87,8 @@ pub struct BvhParams {
     pub sah_bins: u32,
     /// The child visiting order.
     pub traversal: Traversal,
+    /// Most rounds of the reinsertion pass run on the built tree (0: off), in [`BvhParams::REINSERTION_ROUNDS`].
+    pub reinsertion: u32,
     /// The cost constants the SAH splits build with (ignored by the other splits).
     pub sah_costs: SahCosts,
     /// Overlap threshold of [`Split::SpatialSah`], in [`BvhParams::SPATIAL_ALPHAS`] (ignored by the other splits).
@@ -126,6 +128,7 @@ impl Default for BvhParams {
             split: Split::CentroidMidpoint,
             sah_bins: 16,
             traversal: Traversal::Fixed,
+            reinsertion: 0,
             sah_costs: SahCosts::UNIT,
             spatial_alpha: SpatialAlpha::DEFAULT,
         }
@@ -158,6 +161,8 @@ impl BvhParams {
     pub const MAX_LEAF_SIZE: u32 = *Self::LEAF_SIZES.end();
     /// Allowed `sah_bins` values.
     pub const SAH_BINS: RangeInclusive<u32> = 2..=256;
+    /// Allowed `reinsertion` values (most rounds; 0: off).
+    pub const REINSERTION_ROUNDS: RangeInclusive<u32> = 0..=64;
     /// Allowed SAH cost constants.
     pub const SAH_COSTS: RangeInclusive<f32> = 1e-3..=1e3;
     /// Allowed `spatial_alpha` values.
@@ -171,6 +176,7 @@ impl BvhParams {
         };
         check("leaf_size", Self::LEAF_SIZES, self.leaf_size)?;
         check("sah_bins", Self::SAH_BINS, self.sah_bins)?;
+        check("reinsertion", Self::REINSERTION_ROUNDS, self.reinsertion)?;
         for (key, cost) in
             [("sah_traversal_cost", self.sah_costs.traversal), ("sah_intersection_cost", self.sah_costs.intersection)]
         {
