@@ -88,17 +88,25 @@ fn the_sah_cost_never_increases_and_drops_on_midpoint_trees() {
     }
 }
 
-/// Panics unless `tree` is laid out as the builder lays trees out, over every primitive of `prims` once, with boxes
-/// that hold their children and primitives; returns its leaves as (primitive ids, box), sorted.
-fn check_layout<P: Primitive + PartialEq>(label: &str, tree: &BuiltTree<P>, prims: &[P]) -> Vec<(Vec<u32>, [u32; 6])> {
+/// Panics unless `tree` is laid out as the builder lays trees out, over every primitive of `prims` once (at least
+/// once where `split` repeats primitives in several leaves: spatial splits), with boxes that hold their children and
+/// primitives; returns its leaves as (primitive ids, box), sorted.
+fn check_layout<P: Primitive + PartialEq>(
+    label: &str,
+    split: Split,
+    tree: &BuiltTree<P>,
+    prims: &[P],
+) -> Vec<(Vec<u32>, [u32; 6])> {
     let nodes = &tree.nodes;
-    assert_eq!(tree.prim_order.len(), prims.len(), "{label}");
-    assert_eq!(tree.ordered.len(), prims.len(), "{label}");
+    let repeats = split == Split::SpatialSah;
+    assert!(tree.prim_order.len() == prims.len() || repeats && tree.prim_order.len() > prims.len(), "{label}");
+    assert_eq!(tree.ordered.len(), tree.prim_order.len(), "{label}");
     let mut seen = vec![false; prims.len()];
     for (k, &id) in tree.prim_order.iter().enumerate() {
-        assert!(!std::mem::replace(&mut seen[id as usize], true), "{label}: primitive {id} twice");
+        assert!(!std::mem::replace(&mut seen[id as usize], true) || repeats, "{label}: primitive {id} twice");
         assert!(tree.ordered[k] == prims[id as usize], "{label}: ordered[{k}] is not primitive {id}");
     }
+    assert!(seen.iter().all(|&s| s), "{label}: every primitive in some leaf");
     // Replays the builder's allocation: children pairs handed out in depth-first order, runs in leaf order.
     let (mut next_pair, mut next_prim, mut leaves) = (1usize, 0u32, Vec::new());
     let mut stack = vec![(0usize, 0usize)];
@@ -109,8 +117,17 @@ fn check_layout<P: Primitive + PartialEq>(label: &str, tree: &BuiltTree<P>, prim
             assert_eq!(node.first, next_prim, "{label}: leaf {index}'s run is not next in leaf order");
             next_prim += node.prim_count;
             let ids = tree.prim_order[node.first as usize..next_prim as usize].to_vec();
-            let held = ids.iter().map(|&id| prims[id as usize].bounds()).fold(Aabb::EMPTY, |a, b| a.union(&b));
-            assert_eq!(node.bounds.union(&held), node.bounds, "{label}: leaf {index} does not hold its primitives");
+            if repeats {
+                // A spatial split's leaf holds the parts of its primitives clipped to it: it meets each one's box.
+                for &id in &ids {
+                    let b = prims[id as usize].bounds();
+                    let meets = b.min.cmple(node.bounds.max).all() && node.bounds.min.cmple(b.max).all();
+                    assert!(meets, "{label}: leaf {index} does not meet primitive {id}");
+                }
+            } else {
+                let held = ids.iter().map(|&id| prims[id as usize].bounds()).fold(Aabb::EMPTY, |a, b| a.union(&b));
+                assert_eq!(node.bounds.union(&held), node.bounds, "{label}: leaf {index} does not hold its primitives");
+            }
             let mut sorted = ids;
             sorted.sort_unstable();
             let b = node.bounds;
@@ -120,13 +137,15 @@ fn check_layout<P: Primitive + PartialEq>(label: &str, tree: &BuiltTree<P>, prim
             assert_eq!(first, next_pair, "{label}: node {index}'s children are not the next pair");
             next_pair += 2;
             let union = nodes[first].bounds.union(&nodes[first + 1].bounds);
-            assert_eq!(node.bounds, union, "{label}: node {index}'s box is not its children's");
+            // A spatial split's node keeps the box it was split in, which holds its children's clipped boxes.
+            let holds = if repeats { node.bounds.union(&union) == node.bounds } else { node.bounds == union };
+            assert!(holds, "{label}: node {index}'s box {:?} is not its children's {union:?}", node.bounds);
             stack.push((first + 1, depth + 1));
             stack.push((first, depth + 1));
         }
     }
     assert_eq!(next_pair, nodes.len(), "{label}: every node reached once");
-    assert_eq!(next_prim as usize, prims.len(), "{label}: every primitive in a leaf");
+    assert_eq!(next_prim as usize, tree.prim_order.len(), "{label}: every reference in a leaf");
     leaves.sort_unstable();
     leaves
 }
@@ -142,12 +161,16 @@ fn the_optimized_tree_is_a_valid_layout_with_the_same_leaves() {
                 let label = format!("{} {split:?} leaf {leaf_size}", kind.name());
                 let bvh = BvhParams { split, leaf_size, ..BvhParams::default() };
                 let optimized = BvhParams { reinsertion: 4, ..bvh };
-                let before = check_layout(&label, &builder::build(&spheres, &bvh), &spheres);
+                let before = check_layout(&label, split, &builder::build(&spheres, &bvh), &spheres);
                 let tree = builder::build(&spheres, &optimized);
-                assert_eq!(check_layout(&label, &tree, &spheres), before, "{label}: the same leaves");
+                assert_eq!(check_layout(&label, split, &tree, &spheres), before, "{label}: the same leaves");
                 let blocks = builder::build_for_blocks(&triangles, &optimized, 8);
-                let before = check_layout(&label, &builder::build_for_blocks(&triangles, &bvh, 8), &triangles);
-                assert_eq!(check_layout(&label, &blocks, &triangles), before, "{label} triangles: the same leaves");
+                let before = check_layout(&label, split, &builder::build_for_blocks(&triangles, &bvh, 8), &triangles);
+                assert_eq!(
+                    check_layout(&label, split, &blocks, &triangles),
+                    before,
+                    "{label} triangles: the same leaves"
+                );
             }
         }
     }
