@@ -242,15 +242,7 @@ impl<P: Referenced> Spatial<'_, P> {
             return Division::Median;
         }
         let may_be_leaf = n <= self.params.leaf_size as usize;
-        let mut centroids = Box3A::EMPTY;
-        refs.iter().for_each(|r| centroids.grow(r.centroid()));
-        let view = NodeView {
-            boxes: &[],
-            centroids: &[],
-            bounds: bounds.aabb(),
-            centroid_bounds: centroids.aabb(),
-            may_be_leaf,
-        };
+        let view = node_view(refs, bounds, may_be_leaf);
         let bins = self.params.sah_bins as usize;
         let object = binned_sah::best(&view, refs, bins, self.costs, &mut self.bins);
         let try_spatial = match &object {
@@ -406,15 +398,7 @@ impl<P: Referenced> Spatial<'_, P> {
 
     /// The object split of `refs` (or the median when it has none), the right side moved to `right`.
     fn apply_object_or_median(&mut self, refs: &mut Vec<SpatialRef>, bounds: Box3A, right: &mut Vec<SpatialRef>) {
-        let mut centroids = Box3A::EMPTY;
-        refs.iter().for_each(|r| centroids.grow(r.centroid()));
-        let view = NodeView {
-            boxes: &[],
-            centroids: &[],
-            bounds: bounds.aabb(),
-            centroid_bounds: centroids.aabb(),
-            may_be_leaf: false,
-        };
+        let view = node_view(refs, bounds, false);
         let bins = self.params.sah_bins as usize;
         let n = refs.len();
         let mid = match binned_sah::best(&view, refs, bins, self.costs, &mut self.bins) {
@@ -453,4 +437,11 @@ fn partition(refs: &mut [SpatialRef], mut left: impl FnMut(&SpatialRef) -> bool)
         }
     }
     mid
+}
+
+/// What the object split reads of a node: its box and its references' centroid bounds (no per-primitive arrays).
+fn node_view(refs: &[SpatialRef], bounds: Box3A, may_be_leaf: bool) -> NodeView<'static> {
+    let mut centroids = Box3A::EMPTY;
+    refs.iter().for_each(|r| centroids.grow(r.centroid()));
+    NodeView { boxes: &[], centroids: &[], bounds: bounds.aabb(), centroid_bounds: centroids.aabb(), may_be_leaf }
 }
