@@ -131,11 +131,13 @@ fn build_top_down<P: Referenced>(spheres: &[P], params: &BvhParams, block: u32, 
     BuiltTree { nodes: b.nodes, prim_order: prims, ordered }
 }
 
-fn ceil_log2(n: usize) -> usize {
+/// `ceil(log2(n))` (0 for n ≤ 1): the least depth of a binary tree with `n` leaves.
+pub(super) fn ceil_log2(n: usize) -> usize {
     (usize::BITS - n.saturating_sub(1).leading_zeros()) as usize
 }
 
-const PLACEHOLDER: FlatNode = FlatNode { bounds: Aabb::EMPTY, first: 0, prim_count: 0 };
+/// A node slot reserved before its subtree is built.
+pub(super) const PLACEHOLDER: FlatNode = FlatNode { bounds: Aabb::EMPTY, first: 0, prim_count: 0 };
 
 /// What every node's split decision reads: the parameters and the per-primitive spheres, boxes and centroids.
 struct Inputs<'a, P> {

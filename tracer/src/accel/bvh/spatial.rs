@@ -19,7 +19,7 @@
 
 use glam::Vec3A;
 
-use super::builder::{BuiltTree, FlatNode, MAX_DEPTH};
+use super::builder::{BuiltTree, FlatNode, MAX_DEPTH, PLACEHOLDER, ceil_log2};
 use super::params::BvhParams;
 use super::sah::CostModel;
 use super::split::clip::is_empty;
@@ -83,16 +83,10 @@ pub fn build_with_boxes<P: Referenced>(
     (BuiltTree { nodes: b.nodes, prim_order: b.order, ordered }, b.leaf_boxes)
 }
 
-const PLACEHOLDER: FlatNode = FlatNode { bounds: Aabb::EMPTY, first: 0, prim_count: 0 };
-
 fn union(refs: &[SpatialRef]) -> Box3A {
     let mut b = Box3A::EMPTY;
     refs.iter().for_each(|r| b.add(&r.bounds));
     b
-}
-
-fn ceil_log2(n: usize) -> usize {
-    (usize::BITS - n.saturating_sub(1).leading_zeros()) as usize
 }
 
 /// One slab of the spatial binning: the union of the parts clipped into it, references entering and leaving in it.
