@@ -245,7 +245,13 @@ mod tests {
     use super::*;
 
     fn point(lo: f64, hi: f64, threads: f64, reference_threads: f64) -> Point {
-        Point { x: 1.0, estimate: Estimate { value: (lo + hi) / 2.0, lo, hi }, threads, reference_threads }
+        Point {
+            x: 1.0,
+            estimate: Estimate { value: (lo + hi) / 2.0, lo, hi },
+            threads,
+            reference_threads,
+            provenance: Default::default(),
+        }
     }
 
     #[test]

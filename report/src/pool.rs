@@ -17,6 +17,37 @@ pub struct Point {
     pub threads: f64,
     /// Largest `threads` among the runs the series is compared with (ratio curves; NaN for metric curves).
     pub reference_threads: f64,
+    /// The series' runs behind the point: how many, and their commits and machines.
+    pub provenance: Provenance,
+}
+
+/// How many runs stand behind a point, and which commits and machines recorded them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Provenance {
+    /// Number of runs (repetitions and seeds pooled).
+    pub n: usize,
+    /// Distinct `git_commit` values, in order of appearance.
+    pub commits: Vec<String>,
+    /// Distinct machines as `cpu_model (machine_id)`, in order of appearance.
+    pub machines: Vec<String>,
+}
+
+impl Provenance {
+    /// The provenance of `group`.
+    pub fn of(group: &[&Run]) -> Provenance {
+        let mut p = Provenance { n: group.len(), ..Provenance::default() };
+        for run in group {
+            let commit = run.text(column::git_commit).to_string();
+            let machine = format!("{} ({})", run.text(column::cpu_model), run.text(column::machine_id));
+            if !p.commits.contains(&commit) {
+                p.commits.push(commit);
+            }
+            if !p.machines.contains(&machine) {
+                p.machines.push(machine);
+            }
+        }
+        p
+    }
 }
 
 /// Whether `other` is `run`'s counterpart: equal on every setting column and the machine, except the
@@ -135,7 +166,13 @@ fn curves_with(
                 .into_iter()
                 .filter_map(|(xv, group)| {
                     let (estimate, reference_threads) = estimate(&fixed, xv, &group)?;
-                    Some(Point { x: xv, estimate, threads: max_threads(&group), reference_threads })
+                    Some(Point {
+                        x: xv,
+                        estimate,
+                        threads: max_threads(&group),
+                        reference_threads,
+                        provenance: Provenance::of(&group),
+                    })
                 })
                 .collect();
             Curve { fixed, points }
@@ -166,7 +203,13 @@ pub fn trade_off_curves(runs: &[Run], series: &str, x: &str, y: &str) -> Vec<Cur
             let key = format!("{series}|{fixed}|{x}|{y}");
             let x_median = stats::median_ci(&xs, stats::seed_for(&key)).value;
             let estimate = stats::median_ci(&ys, stats::seed_for(&key));
-            let point = Point { x: x_median, estimate, threads: max_threads(&group), reference_threads: f64::NAN };
+            let point = Point {
+                x: x_median,
+                estimate,
+                threads: max_threads(&group),
+                reference_threads: f64::NAN,
+                provenance: Provenance::of(&group),
+            };
             Some(Curve { fixed, points: vec![point] })
         })
         .collect()

@@ -1,20 +1,16 @@
 //! Drawing one line chart with 95% error bars to SVG and PNG with plotters and the bundled font.
 
 use std::path::Path;
-use std::sync::Once;
 
 use plotters::coord::Shift;
 use plotters::coord::combinators::BindKeyPoints;
 use plotters::coord::ranged1d::{AsRangedCoord, DefaultFormatting, KeyPointHint, ValueFormatter};
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
-use plotters::style::FontStyle;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-/// Image size in pixels.
-const SIZE: (u32, u32) = (1200, 750);
-/// The font every text is set in, bundled so that no system font is needed.
-const FONT: &str = "sans-serif";
-static FONT_BYTES: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
+use super::layout::{self, FONT, LEGEND_KEY, Labels, Layout, Rect, TEXT_OFFSET, TICK_SIZE, Text, register_font};
+
 /// Series colours (Tableau 10), distinct in colour and in lightness.
 const PALETTE: [RGBColor; 8] = [
     RGBColor(31, 119, 180),
@@ -56,14 +52,6 @@ pub struct Chart {
     pub lines: Vec<Line>,
     /// A dashed horizontal line (y value, legend label), e.g. at 1 for speedups.
     pub guide: Option<(f64, String)>,
-}
-
-fn register_font() {
-    static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        // The bundled file is a valid font; if it were not, text would be missing, not the chart.
-        let _ = plotters::style::register_font(FONT, FontStyle::Normal, FONT_BYTES);
-    });
 }
 
 /// What a figure over commits adds to a chart: whole-number x ticks with labels, unjoined marks and
@@ -113,11 +101,86 @@ pub fn render_with(
     png: &Path,
 ) -> Result<(), (std::path::PathBuf, String)> {
     register_font();
-    draw_any(SVGBackend::new(svg, SIZE).into_drawing_area(), chart, overlay).map_err(|e| (svg.to_path_buf(), e))?;
-    let mut rgb = vec![0u8; SIZE.0 as usize * SIZE.1 as usize * 3];
-    draw_any(BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area(), chart, overlay)
+    let plan = plan(chart, overlay);
+    let size = plan.layout.size;
+    draw_any(SVGBackend::new(svg, size).into_drawing_area(), chart, overlay, &plan)
+        .map_err(|e| (svg.to_path_buf(), e))?;
+    let mut rgb = vec![0u8; size.0 as usize * size.1 as usize * 3];
+    draw_any(BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area(), chart, overlay, &plan)
         .map_err(|e| (png.to_path_buf(), e))?;
-    write_png(png, SIZE, &rgb).map_err(|e| (png.to_path_buf(), e.to_string()))
+    write_png(png, size, &rgb).map_err(|e| (png.to_path_buf(), e.to_string()))
+}
+
+/// How many labelled ticks plotters' own axes get (its default).
+const AXIS_LABELS: usize = 11;
+
+/// What a legend entry's sample shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Key {
+    /// The dashed guide line.
+    Guide,
+    /// A series' line and marker, by its style index.
+    Series(usize),
+    Marks(Mark),
+}
+
+/// A chart ready to draw: its axis ranges, legend samples (in the layout's legend order) and layout.
+struct Plan {
+    x: (f64, f64),
+    y: (f64, f64),
+    /// Whether the x axis is an overlay's labelled whole-number axis.
+    labelled: bool,
+    keys: Vec<Key>,
+    layout: Layout,
+}
+
+/// The axis ranges, tick labels and legend of `chart` with `overlay`, and the layout made for them.
+fn plan(chart: &Chart, overlay: &Overlay) -> Plan {
+    let xs = chart.lines.iter().flat_map(|l| l.points.iter().map(|p| p.x));
+    let labelled = !chart.log_x && !overlay.x_ticks.is_empty();
+    let (x0, x1) = if labelled {
+        let ticks = overlay.x_ticks.iter().map(|t| t.0);
+        let (lo, hi) = ticks.chain(xs).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+        (lo - 0.5, hi + 0.5)
+    } else {
+        range(xs, chart.log_x, false)
+    };
+    let ys = chart.lines.iter().flat_map(|l| l.points.iter().flat_map(|p| [p.y, p.lo, p.hi]));
+    let (y0, y1) = range(ys.chain(chart.guide.as_ref().map(|g| g.0)), chart.log_y, true);
+    // The labels plotters will draw: the same key points and formatters as `draw`.
+    let linear = |lo: f64, hi: f64| RangedCoordf64::from(lo..hi).key_points(AXIS_LABELS);
+    let x_ticks: Vec<String> = if labelled {
+        shown_ticks(&overlay.x_ticks).into_iter().map(|t| t.1).collect()
+    } else if chart.log_x {
+        log_ticks(x0, x1, false).into_iter().map(tick).collect()
+    } else {
+        linear(x0, x1).into_iter().map(tick).collect()
+    };
+    let y_values = if chart.log_y { log_ticks(y0, y1, false) } else { linear(y0, y1) };
+    let y_ticks: Vec<String> = y_values.into_iter().map(tick).collect();
+    let mut legend: Vec<String> = Vec::new();
+    let mut keys: Vec<Key> = Vec::new();
+    if let Some((_, label)) = &chart.guide {
+        legend.push(label.clone());
+        keys.push(Key::Guide);
+    }
+    for line in &chart.lines {
+        legend.push(line.label.clone());
+        keys.push(Key::Series(line.style));
+    }
+    for marks in overlay.marks.iter().filter(|m| !m.points.is_empty()) {
+        legend.push(marks.label.clone());
+        keys.push(Key::Marks(marks.mark));
+    }
+    let labels = Labels {
+        title: &chart.title,
+        x: &chart.x_label,
+        y: &chart.y_label,
+        legend: &legend,
+        x_ticks: &x_ticks,
+        y_ticks: &y_ticks,
+    };
+    Plan { x: (x0, x1), y: (y0, y1), labelled, keys, layout: layout::layout(&labels) }
 }
 
 /// Encodes an RGB buffer with the tracer's PNG encoder (plotters' own encoder would bring in the `image`
@@ -161,71 +224,36 @@ impl Ranged for WholeTicks {
     }
 }
 
-/// Picks linear or logarithmic axes and draws.
-fn draw_any<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, chart: &Chart, overlay: &Overlay) -> Result<(), String>
+/// Picks linear or logarithmic axes and draws; returns the plotting area plotters drew in.
+fn draw_any<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    chart: &Chart,
+    overlay: &Overlay,
+    plan: &Plan,
+) -> Result<Rect, String>
 where
     DB::ErrorType: 'static,
 {
-    let xs = chart.lines.iter().flat_map(|l| l.points.iter().map(|p| p.x));
-    let labelled = !chart.log_x && !overlay.x_ticks.is_empty();
-    let (x0, x1) = if labelled {
-        let ticks = overlay.x_ticks.iter().map(|t| t.0);
-        let (lo, hi) = ticks.chain(xs).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
-        (lo - 0.5, hi + 0.5)
-    } else {
-        range(xs, chart.log_x, false)
-    };
-    let ys = chart.lines.iter().flat_map(|l| l.points.iter().flat_map(|p| [p.y, p.lo, p.hi]));
-    let (y0, y1) = range(ys.chain(chart.guide.as_ref().map(|g| g.0)), chart.log_y, true);
+    let ((x0, x1), (y0, y1)) = (plan.x, plan.y);
     // Log axes get their own 1-2-5 ticks: plotters' defaults label too few or overlapping values.
     let log = |lo: f64, hi: f64| {
         (lo..hi).log_scale().with_key_points(log_ticks(lo, hi, false)).with_light_points(log_ticks(lo, hi, true))
     };
-    let corner = legend_corner(chart, (x0, x1), (y0, y1));
     // Whole-number x ticks: bold (labelled) at the shown ones, light at every labelled value (up to 100).
     let whole = || WholeTicks {
         inner: (x0..x1).into(),
         bold: shown_ticks(&overlay.x_ticks).into_iter().map(|t| t.0).collect(),
         light: if overlay.x_ticks.len() <= 100 { overlay.x_ticks.iter().map(|t| t.0).collect() } else { vec![] },
     };
-    let o = overlay;
+    let (o, p) = (overlay, plan);
     match (chart.log_x, chart.log_y) {
-        (false, false) if labelled => draw(root, chart, o, corner, whole(), y0..y1),
-        (false, true) if labelled => draw(root, chart, o, corner, whole(), log(y0, y1)),
-        (false, false) => draw(root, chart, o, corner, x0..x1, y0..y1),
-        (true, false) => draw(root, chart, o, corner, log(x0, x1), y0..y1),
-        (false, true) => draw(root, chart, o, corner, x0..x1, log(y0, y1)),
-        (true, true) => draw(root, chart, o, corner, log(x0, x1), log(y0, y1)),
+        (false, false) if p.labelled => draw(root, chart, o, p, whole(), y0..y1),
+        (false, true) if p.labelled => draw(root, chart, o, p, whole(), log(y0, y1)),
+        (false, false) => draw(root, chart, o, p, x0..x1, y0..y1),
+        (true, false) => draw(root, chart, o, p, log(x0, x1), y0..y1),
+        (false, true) => draw(root, chart, o, p, x0..x1, log(y0, y1)),
+        (true, true) => draw(root, chart, o, p, log(x0, x1), log(y0, y1)),
     }
-}
-
-/// The plot corner with the fewest data marks (points and interval ends), for the legend.
-fn legend_corner(chart: &Chart, x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
-    let unit = |v: f64, (lo, hi): (f64, f64), log: bool| {
-        if log { (v.ln() - lo.ln()) / (hi.ln() - lo.ln()) } else { (v - lo) / (hi - lo) }
-    };
-    let marks: Vec<(f64, f64)> = chart
-        .lines
-        .iter()
-        .flat_map(|l| l.points.iter())
-        .flat_map(|p| [(p.x, p.y), (p.x, p.lo), (p.x, p.hi)])
-        .map(|(px, py)| (unit(px, x, chart.log_x), unit(py, y, chart.log_y)))
-        .collect();
-    let busy = |left: bool, upper: bool| {
-        marks
-            .iter()
-            .filter(|(u, _)| if left { *u < 0.4 } else { *u > 0.6 })
-            .filter(|(_, v)| if upper { *v > 0.65 } else { *v < 0.35 })
-            .count()
-    };
-    let corners = [
-        (SeriesLabelPosition::UpperLeft, busy(true, true)),
-        (SeriesLabelPosition::UpperRight, busy(false, true)),
-        (SeriesLabelPosition::LowerRight, busy(false, false)),
-        (SeriesLabelPosition::LowerLeft, busy(true, false)),
-    ];
-    // The first corner with the fewest marks (min_by_key keeps the first of equals).
-    corners.into_iter().min_by_key(|c| c.1).map(|c| c.0).unwrap_or(SeriesLabelPosition::UpperLeft)
 }
 
 /// Tick values for a log axis over [lo, hi] (lo > 0): 1-2-5 per decade over few decades, fewer
@@ -320,14 +348,64 @@ fn mark_shape(mark: Mark) -> [(Vec<(i32, i32)>, ShapeStyle); 2] {
     }
 }
 
+/// Draws one line of laid-out text so that its glyphs stay in its box.
+fn text<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, t: &Text) -> Result<(), String> {
+    let offset = (t.size * TEXT_OFFSET).round() as i32;
+    let font = (FONT, t.size).into_font().color(&BLACK);
+    let drawn = if t.vertical {
+        // Rotated to read bottom to top: the anchor's "below" points right.
+        let style = font.transform(FontTransform::Rotate270).pos(Pos::new(HPos::Center, VPos::Top));
+        root.draw_text(&t.text, &style, (t.rect.left + offset, (t.rect.top + t.rect.bottom) / 2))
+    } else {
+        root.draw_text(&t.text, &font.pos(Pos::new(HPos::Left, VPos::Top)), (t.rect.left, t.rect.top + offset))
+    };
+    drawn.map_err(|e| e.to_string())
+}
+
+/// Draws the legend box of `plan`'s layout with every entry's sample and label.
+fn draw_legend<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, plan: &Plan) -> Result<(), String> {
+    let Some(legend) = &plan.layout.legend else { return Ok(()) };
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let r = legend.rect;
+    let corners = [(r.left, r.top), (r.right - 1, r.bottom - 1)];
+    root.draw(&Rectangle::new(corners, WHITE.filled())).map_err(e)?;
+    root.draw(&Rectangle::new(corners, RGBColor(160, 160, 160).stroke_width(1))).map_err(e)?;
+    for (entry, key) in legend.entries.iter().zip(&plan.keys) {
+        let at = (entry.key.left + LEGEND_KEY / 2, (entry.key.top + entry.key.bottom) / 2);
+        match *key {
+            Key::Guide => {
+                let style = BLACK.stroke_width(2);
+                let (x, y) = at;
+                root.draw(&PathElement::new([(x - 13, y), (x - 3, y)], style)).map_err(e)?;
+                root.draw(&PathElement::new([(x + 3, y), (x + 13, y)], style)).map_err(e)?;
+            }
+            Key::Series(style) => {
+                let colour = PALETTE[style % PALETTE.len()];
+                let sample = EmptyElement::at(at)
+                    + PathElement::new([(-13, 0), (13, 0)], colour.stroke_width(2))
+                    + Polygon::new(marker(style), colour.filled());
+                root.draw(&sample).map_err(e)?;
+            }
+            Key::Marks(mark) => {
+                let [(a, a_style), (b, b_style)] = mark_shape(mark);
+                let sample = EmptyElement::at(at) + PathElement::new(a, a_style) + PathElement::new(b, b_style);
+                root.draw(&sample).map_err(e)?;
+            }
+        }
+        text(root, &entry.label)?;
+    }
+    Ok(())
+}
+
+/// Draws the chart where `plan`'s layout puts each part; returns the plotting area plotters drew in.
 fn draw<DB, X, Y>(
     root: DrawingArea<DB, Shift>,
     chart: &Chart,
     overlay: &Overlay,
-    legend: SeriesLabelPosition,
+    plan: &Plan,
     x: X,
     y: Y,
-) -> Result<(), String>
+) -> Result<Rect, String>
 where
     DB: DrawingBackend,
     DB::ErrorType: 'static,
@@ -337,24 +415,31 @@ where
     Y::CoordDescType: ValueFormatter<f64>,
 {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let l = &plan.layout;
     root.fill(&WHITE).map_err(e)?;
-    let mut cc = ChartBuilder::on(&root)
-        .caption(&chart.title, (FONT, 32))
-        .margin(24)
-        .x_label_area_size(70)
-        .y_label_area_size(100)
+    for t in &l.title {
+        text(&root, t)?;
+    }
+    // The plot with its tick label areas left of and below it; the axis descriptions and legend outside.
+    let (y_ticks, x_ticks) = (l.plot.left - l.y_ticks.left, l.x_ticks.height());
+    let area = root.clone().shrink((l.y_ticks.left, l.plot.top), (l.plot.width() + y_ticks, l.plot.height() + x_ticks));
+    let mut cc = ChartBuilder::on(&area)
+        .margin(0)
+        .x_label_area_size(x_ticks)
+        .y_label_area_size(y_ticks)
         .build_cartesian_2d(x, y)
         .map_err(e)?;
+    let (px, py) = cc.plotting_area().get_pixel_range();
+    let drawn = Rect { left: px.start, top: py.start, right: px.end, bottom: py.end };
     let format = |v: &f64| tick(*v);
     let x_format = |v: &f64| match overlay.x_ticks.iter().find(|t| (t.0 - v).abs() < 1e-6) {
         Some(t) => t.1.clone(),
         None => tick(*v),
     };
     cc.configure_mesh()
-        .x_desc(chart.x_label.as_str())
-        .y_desc(chart.y_label.as_str())
-        .axis_desc_style((FONT, 24))
-        .label_style((FONT, 20))
+        .x_labels(AXIS_LABELS)
+        .y_labels(AXIS_LABELS)
+        .label_style((FONT, TICK_SIZE))
         .x_label_formatter(&x_format)
         .y_label_formatter(&format)
         .light_line_style(RGBColor(235, 235, 235))
@@ -362,13 +447,10 @@ where
         .draw()
         .map_err(e)?;
 
-    if let Some((value, label)) = &chart.guide {
+    if let Some((value, _)) = &chart.guide {
         let (x0, x1) = (cc.x_range().start, cc.x_range().end);
         let style = BLACK.stroke_width(2);
-        cc.draw_series(DashedLineSeries::new([(x0, *value), (x1, *value)], 12, 8, style))
-            .map_err(e)?
-            .label(label.as_str())
-            .legend(move |(lx, ly)| PathElement::new([(lx, ly), (lx + 10, ly), (lx + 16, ly), (lx + 26, ly)], style));
+        cc.draw_series(DashedLineSeries::new([(x0, *value), (x1, *value)], 12, 8, style)).map_err(e)?;
     }
 
     // Rules first, behind the data.
@@ -393,48 +475,164 @@ where
         )
         .map_err(e)?;
         cc.draw_series(LineSeries::new(line.points.iter().map(|p| (p.x, p.y)), stroke)).map_err(e)?;
-        let legend_shape = shape.clone();
         cc.draw_series(
             line.points.iter().map(|p| EmptyElement::at((p.x, p.y)) + Polygon::new(shape.clone(), colour.filled())),
         )
-        .map_err(e)?
-        .label(line.label.as_str())
-        .legend(move |(lx, ly)| {
-            EmptyElement::at((lx + 13, ly))
-                + PathElement::new([(-13, 0), (13, 0)], stroke)
-                + Polygon::new(legend_shape.clone(), colour.filled())
-        });
+        .map_err(e)?;
     }
 
     for marks in overlay.marks.iter().filter(|m| !m.points.is_empty()) {
         let [(a, a_style), (b, b_style)] = mark_shape(marks.mark);
-        let (la, lb) = (a.clone(), b.clone());
         cc.draw_series(marks.points.iter().map(|&at| {
             EmptyElement::at(at) + PathElement::new(a.clone(), a_style) + PathElement::new(b.clone(), b_style)
         }))
-        .map_err(e)?
-        .label(marks.label.as_str())
-        .legend(move |(lx, ly)| {
-            EmptyElement::at((lx + 13, ly))
-                + PathElement::new(la.clone(), a_style)
-                + PathElement::new(lb.clone(), b_style)
-        });
+        .map_err(e)?;
     }
 
-    cc.configure_series_labels()
-        .position(legend)
-        .label_font((FONT, 20))
-        .background_style(WHITE.mix(0.85))
-        .border_style(RGBColor(160, 160, 160))
-        .draw()
-        .map_err(e)?;
+    for t in l.x_desc.iter().chain(&l.y_desc) {
+        text(&root, t)?;
+    }
+    draw_legend(&root, plan)?;
     root.present().map_err(e)?;
-    Ok(())
+    Ok(drawn)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::figures::layout::{BASE, Layout, MARGIN};
+
+    /// Draws into an RGB buffer: the pixels, the plan and the plotting area plotters drew in.
+    fn render_rgb(chart: &Chart, overlay: &Overlay) -> (Vec<u8>, Plan, Rect) {
+        register_font();
+        let plan = plan(chart, overlay);
+        let size = plan.layout.size;
+        let mut rgb = vec![0u8; size.0 as usize * size.1 as usize * 3];
+        let area = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
+        let drawn = draw_any(area, chart, overlay, &plan).unwrap();
+        (rgb, plan, drawn)
+    }
+
+    /// The pixels that are not background.
+    fn ink(rgb: &[u8], width: u32) -> impl Iterator<Item = (i32, i32)> + '_ {
+        rgb.chunks_exact(3)
+            .enumerate()
+            .filter(|(_, p)| p != &[255, 255, 255])
+            .map(move |(i, _)| ((i as u32 % width) as i32, (i as u32 / width) as i32))
+    }
+
+    /// A chart with `series` lines of long labels, every point inside a 95% interval, over x 1..=8.
+    fn busy_chart(title: &str, series: usize, log_y: bool) -> Chart {
+        let lines = (0..series)
+            .map(|s| Line {
+                label: format!("flat-sah-front-to-back-{s} objects 1000000 (threads 1)"),
+                style: s,
+                points: (1..=8)
+                    .map(|x| {
+                        let y = 1.0 + (s * 7 + x * 3) as f64 % 20.0;
+                        ChartPoint { x: x as f64, y, lo: y * 0.9, hi: y * 1.1 }
+                    })
+                    .collect(),
+            })
+            .collect();
+        Chart {
+            title: title.into(),
+            x_label: "commit of each appended run, in order".into(),
+            y_label: "speedup vs reference (×)".into(),
+            log_x: false,
+            log_y,
+            lines,
+            guide: Some((1.0, "same as reference".into())),
+        }
+    }
+
+    fn history_overlay() -> Overlay {
+        Overlay {
+            x_ticks: (1..=8).map(|i| (i as f64, format!("{i:07x}"))).collect(),
+            marks: vec![
+                Marks { label: "regression (drop > 10%)".into(), mark: Mark::Cross, points: vec![(3.0, 5.0)] },
+                Marks {
+                    label: "change point (new level from here)".into(),
+                    mark: Mark::Ring,
+                    points: vec![(8.0, 21.0)],
+                },
+            ],
+            rules: vec![2.5],
+        }
+    }
+
+    /// Checks a rendered chart: plotters drew the plot where the layout put it, the legend box is off the
+    /// plot (with room for markers at its edge), and every drawn pixel lies in a box the layout gave out.
+    fn check_drawn(rgb: &[u8], layout: &Layout, drawn: Rect) {
+        assert_eq!(drawn, layout.plot, "plotters' plotting area is not the layout's");
+        // Markers and interval caps reach this far beyond the plot around points at its edges.
+        let plot = layout.plot.grown(14);
+        let legend = layout.legend.as_ref().map(|l| l.rect);
+        if let Some(legend) = legend {
+            assert!(!legend.intersects(&plot), "legend {legend:?} covers the plot {plot:?}");
+        }
+        let boxes: Vec<Rect> = [plot, layout.y_ticks, layout.x_ticks]
+            .into_iter()
+            .chain(layout.texts().map(|t| t.rect))
+            .chain(legend)
+            .collect();
+        let stray: Vec<(i32, i32)> =
+            ink(rgb, layout.size.0).filter(|&(x, y)| !boxes.iter().any(|b| b.has(x, y))).collect();
+        assert!(
+            stray.is_empty(),
+            "{} pixels drawn outside the layout's boxes, e.g. {:?}",
+            stray.len(),
+            &stray[..stray.len().min(5)]
+        );
+        // Nothing in the margin.
+        let inner = layout.canvas().grown(-MARGIN / 2);
+        assert!(ink(rgb, layout.size.0).all(|(x, y)| inner.has(x, y)));
+    }
+
+    #[test]
+    fn drawn_charts_keep_to_their_layout() {
+        let long = "Trace time ratio to Embree (rtcIntersect1), primary rays, one thread (>1: faster than Embree)";
+        // Many long legend entries below the plot, on a taller canvas; the x axis labelled with commits.
+        let chart = busy_chart(long, 26, true);
+        let (rgb, plan, drawn) = render_rgb(&chart, &history_overlay());
+        check_drawn(&rgb, &plan.layout, drawn);
+        assert!(plan.layout.size.1 > BASE.1);
+        assert_eq!(plan.keys.len(), 26 + 3);
+        // A few short entries right of the plot; linear axes.
+        let mut chart = busy_chart("Build time", 4, false);
+        chart.lines.iter_mut().for_each(|l| l.label = format!("ours-{}", l.style));
+        let (rgb, plan, drawn) = render_rgb(&chart, &Overlay::default());
+        check_drawn(&rgb, &plan.layout, drawn);
+        assert!(plan.layout.legend.as_ref().unwrap().right_of_plot);
+        // No data at all.
+        let empty = Chart { lines: vec![], guide: None, ..busy_chart("(no data)", 0, true) };
+        let (rgb, plan, drawn) = render_rgb(&empty, &Overlay::default());
+        check_drawn(&rgb, &plan.layout, drawn);
+    }
+
+    #[test]
+    fn text_stays_in_its_box() {
+        register_font();
+        for vertical in [false, true] {
+            for size in [16.0, 20.0, 24.0, 32.0] {
+                let sample = "Éjgq(|) ÅÇ ×}{";
+                let length = layout::text_width(sample, size);
+                let thickness = layout::line_height(size);
+                let (w, h) = if vertical { (thickness, length) } else { (length, thickness) };
+                let rect = Rect::new(20, 30, w, h);
+                let size_px = (400, 400);
+                let mut rgb = vec![255u8; 400 * 400 * 3];
+                let root = BitMapBackend::with_buffer(&mut rgb, size_px).into_drawing_area();
+                text(&root, &Text { text: sample.into(), size, rect, vertical }).unwrap();
+                root.present().unwrap();
+                drop(root);
+                let pixels: Vec<(i32, i32)> = ink(&rgb, 400).collect();
+                assert!(!pixels.is_empty());
+                let outside: Vec<_> = pixels.iter().filter(|&&(x, y)| !rect.has(x, y)).collect();
+                assert!(outside.is_empty(), "vertical {vertical}, size {size}: {outside:?} outside {rect:?}");
+            }
+        }
+    }
 
     #[test]
     fn tick_labels_are_compact() {

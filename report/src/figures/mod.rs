@@ -1,12 +1,13 @@
 //! The figures of a report: one chart per `[[plot]]`, written as `figures/<file>.svg` and `.png`.
 
 pub(crate) mod chart;
+pub(crate) mod layout;
 
 use schema::column;
 use std::path::{Path, PathBuf};
 
 use crate::error::Error;
-use crate::pool::{self, Curve, Point};
+use crate::pool::{self, Curve, Point, Provenance};
 use crate::rows::Rows;
 use crate::spec::{PlotKind, PlotSpec, ReportSpec};
 
@@ -35,12 +36,25 @@ fn plotted_series<'a>(spec: &'a ReportSpec, plot: &'a PlotSpec) -> Vec<&'a str> 
     series
 }
 
+/// A plot's chart and, per line and point, the runs behind the point (the site's tooltips).
+pub(crate) struct Figure {
+    pub chart: Chart,
+    /// Parallel to `chart.lines[i].points`.
+    pub provenance: Vec<Vec<Provenance>>,
+}
+
 /// What a plot shows, as chart data.
 fn chart_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Chart {
+    figure_of(rows, spec, plot).chart
+}
+
+/// What a plot shows, as chart data with each point's provenance.
+pub(crate) fn figure_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Figure {
     let reference = spec.reference.as_deref();
     let metric_ok = rows.is_numeric(&plot.y);
     let runs: Vec<crate::rows::Run> = rows.runs.iter().filter(|r| r.passes(&plot.filter)).cloned().collect();
     let mut lines = Vec::new();
+    let mut provenance = Vec::new();
     for series in plotted_series(spec, plot) {
         let curves: Vec<Curve> = match (plot.kind, reference) {
             _ if !metric_ok => Vec::new(),
@@ -72,6 +86,7 @@ fn chart_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Chart {
             let position = spec.series.iter().position(|s| s == series).filter(|_| single);
             let style = position.unwrap_or(spec.series.len() + lines.len());
             let label = if curve.fixed.is_empty() { series.to_string() } else { format!("{series} ({})", curve.fixed) };
+            provenance.push(curve.points.iter().map(|p| p.provenance.clone()).collect());
             lines.push(Line { label, style, points });
         }
     }
@@ -90,7 +105,7 @@ fn chart_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Chart {
     };
     let title = if lines.is_empty() { format!("{} (no data)", plot.title) } else { plot.title.clone() };
     let x_label = if plot.kind == PlotKind::TradeOff { metric_label(&plot.x) } else { axis_label(&plot.x) };
-    Chart { title, x_label, y_label, log_x: plot.log_x, log_y: plot.log_y, lines, guide }
+    Figure { chart: Chart { title, x_label, y_label, log_x: plot.log_x, log_y: plot.log_y, lines, guide }, provenance }
 }
 
 fn is_time(name: &str) -> bool {
