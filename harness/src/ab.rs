@@ -1,7 +1,8 @@
 //! `harness ab`: the trustworthy comparison on a noisy machine. Builds another git revision, then times every
 //! configuration with both builds in one job, interleaved (A B, then B A, round after round), each run in a
 //! fresh `harness worker` process, and reports each configuration's time ratio new/old with a 95% bootstrap
-//! interval. Both builds must give the same answers, run after run.
+//! interval. Both builds must give the same answers, run after run. A configuration the base revision cannot run
+//! (a setting newer than it, or a request its worker refuses) is skipped and listed.
 //!
 //! The base revision is built in a fresh git worktree under `target/ab/`, by cargo, into the target folder of
 //! the running binary with the same profile, so that it reuses the dependencies already compiled there and only
@@ -21,6 +22,7 @@ use report::stats::{Estimate, ratio_ci, seed_for};
 use crate::config::Experiment;
 use crate::error::Error;
 use crate::plan::{Configuration, Plan};
+use crate::revision::Revision;
 use crate::run::{self, worker};
 
 /// What `harness ab` was asked.
@@ -35,7 +37,7 @@ pub struct AbRequest<'a> {
     pub no_confirm: bool,
 }
 
-fn git(root: &Path, args: &[&str]) -> Result<String, Error> {
+pub(crate) fn git(root: &Path, args: &[&str]) -> Result<String, Error> {
     let out = Command::new("git").current_dir(root).args(args).output().map_err(|e| Error::Run(format!("git: {e}")))?;
     if out.status.success() {
         Ok(String::from_utf8_lossy(&out.stdout).trim().to_string())
@@ -53,14 +55,14 @@ fn cargo() -> String {
 }
 
 /// Where cargo put the running harness: `<target>/<profile folder>/harness`.
-struct Build {
-    target: PathBuf,
+pub(crate) struct Build {
+    pub target: PathBuf,
     /// `release`, `debug`, or a custom profile's name.
     folder: String,
 }
 
 impl Build {
-    fn running() -> Result<Build, Error> {
+    pub fn running() -> Result<Build, Error> {
         let exe =
             std::env::current_exe().map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
         let exe = exe.canonicalize().unwrap_or(exe);
@@ -191,7 +193,7 @@ fn cache_name(rev: &str, profile: &str, rustc_version: &str) -> String {
     format!("harness-{}-{profile}-{:08x}{}", &rev[..12], fnv(rustc_version) as u32, std::env::consts::EXE_SUFFIX)
 }
 
-fn rustc_version(dir: &Path) -> String {
+pub(crate) fn rustc_version(dir: &Path) -> String {
     let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
     Command::new(rustc)
         .current_dir(dir)
@@ -327,7 +329,7 @@ impl Drop for Uplifted {
 }
 
 /// The harness binary of `rev`: cached, or built (see the module's documentation).
-fn base_binary(root: &Path, build: &Build, rev: &str) -> Result<PathBuf, Error> {
+pub(crate) fn base_binary(root: &Path, build: &Build, rev: &str) -> Result<PathBuf, Error> {
     let ab = build.target.join("ab");
     fs::create_dir_all(&ab).map_err(|e| Error::Run(format!("{}: {e}", ab.display())))?;
     let cache = ab.join(cache_name(rev, &build.folder, &rustc_version(root)));
@@ -539,6 +541,23 @@ fn measure(
     Ok(pairs)
 }
 
+/// The configurations of `plan` that revision `rev` (built as `base`) can run, and why each other one is skipped:
+/// a setting newer than the revision ([`Revision::cannot_run`]), or its worker refusing the request (asked once).
+fn runnable_at<'a>(rev: &str, plan: &'a Plan, root: &Path, base: &Path) -> (Vec<&'a Configuration>, Vec<String>) {
+    let revision = Revision::read(root, rev);
+    let (mut runnable, mut skipped) = (Vec::new(), Vec::new());
+    for c in plan.runnable() {
+        let why = revision
+            .cannot_run(&c.settings)
+            .or_else(|| worker::time(base, Some(root), &run::worker_request(plan, c)).err().map(|e| e.to_string()));
+        match why {
+            Some(why) => skipped.push(format!("{}: {why}", describe(c))),
+            None => runnable.push(c),
+        }
+    }
+    (runnable, skipped)
+}
+
 /// Runs the comparison; fails (exit 1) on answers that differ or change, or on a significant single-thread
 /// regression beyond `min_effect` that a second measurement of the configuration (fresh, interleaved) confirms.
 pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
@@ -553,7 +572,13 @@ pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
     let (old_bin, new_bin) = (base_binary(&root, &build, &rev)?, new_copy.0.clone());
     let bins = (old_bin.as_path(), new_bin.as_path());
     let rounds = (exp.warmups, exp.repetitions.max());
-    let all: Vec<&Configuration> = plan.runnable().collect();
+    let (all, skipped) = runnable_at(&rev, &plan, &root, &old_bin);
+    for why in &skipped {
+        note!("ab: skipped, {why}");
+    }
+    if all.is_empty() {
+        return Err(Error::Run(format!("{}: no configuration runs at {}", exp.path.display(), &rev[..12])));
+    }
     let mut pairs = measure(&plan, &all, rounds, bins, &root, "")?;
     let speed = |c: &Configuration, pair: &Pair| {
         let e: Estimate = ratio_ci(&pair.new, &pair.old, seed_for(&c.id));
@@ -606,6 +631,12 @@ pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
             answers.label()
         );
         results.push((describe(c).replace(" | ", ": "), verdict, answers));
+    }
+    if !skipped.is_empty() {
+        say!("\nSkipped: {} configuration(s) the base revision cannot run:\n", skipped.len());
+        for why in &skipped {
+            say!("- {why}");
+        }
     }
     match failure(&results, request.allow_different_answers) {
         Some(why) => Err(Error::Run(why)),

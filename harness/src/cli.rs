@@ -49,6 +49,8 @@ pub enum Command {
     /// Track speedups over commits.
     #[command(subcommand)]
     History(HistoryCommand),
+    /// Write a self-contained static site of results/ (index, a page per experiment, history pages) into --out.
+    Site(SiteArgs),
     /// Internal: time the configuration of the JSON request on stdin in this fresh process and print its timing
     /// as JSON (used for Embree and `ab`).
     #[command(hide = true)]
@@ -201,12 +203,40 @@ pub enum HistoryCommand {
         #[arg(long, default_value = "results/history")]
         dir: PathBuf,
     },
+    /// Count the CI suite at past commits (each built as `ab` builds its base): build and trace instructions under
+    /// callgrind, answer hash and tree shape of every single-thread configuration the revision can run, one entry
+    /// per commit in commits.csv and instructions.csv; commits already there are skipped.
+    Backfill(BackfillArgs),
     /// Plot every tracked speedup over the appended runs (SVG + PNG per experiment, regressions marked).
     Plot {
         /// The history folder.
         #[arg(long, default_value = "results/history")]
         dir: PathBuf,
     },
+}
+
+#[derive(Args, Debug)]
+pub struct BackfillArgs {
+    /// The commits: a git revision range on the first-parent line, e.g. `d4ea610^..main` (d4ea610 included).
+    pub range: String,
+    /// Count every K-th commit of the range (and its last commit always).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub every: u32,
+    /// The suite (its single-thread configurations are counted).
+    #[arg(long, default_value = "experiments/ci.toml")]
+    pub config: PathBuf,
+    /// Apply the config's [quick] overrides.
+    #[arg(long)]
+    pub quick: bool,
+    /// The history folder.
+    #[arg(long, default_value = "results/history")]
+    pub dir: PathBuf,
+    /// Also time each counted configuration this many times (median build and trace seconds, with the machine).
+    #[arg(long, default_value_t = 0)]
+    pub timings: u32,
+    /// Valgrind processes at once (default: logical cores).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=256))]
+    pub jobs: Option<u32>,
 }
 
 #[derive(Subcommand, Debug)]
@@ -315,6 +345,16 @@ pub struct RowsDiffArgs {
     /// Compare every column but timings and the per-run provenance (load, time stamp, shard, job, node).
     #[arg(long)]
     pub ignore_timing: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct SiteArgs {
+    /// The results folder (experiment folders, and history/).
+    #[arg(long, default_value = "results")]
+    pub results: PathBuf,
+    /// Where to write the site (its index.html opens from file://).
+    #[arg(long, default_value = "target/site")]
+    pub out: PathBuf,
 }
 
 #[derive(Args, Debug)]

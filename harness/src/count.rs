@@ -31,6 +31,7 @@ use crate::backend;
 use crate::config::Experiment;
 use crate::error::Error;
 use crate::plan::{self, Configuration, Plan};
+use crate::run::measure::Timing;
 use crate::run::provenance::Provenance;
 use crate::run::{CONFIG_COPY, worker_request};
 
@@ -56,7 +57,7 @@ pub struct CountRequest<'a> {
 }
 
 /// Whether a configuration's phases run in the one thread callgrind follows: `None` if counted, else why not.
-fn uncountable(c: &Configuration) -> Option<&'static str> {
+pub(crate) fn uncountable(c: &Configuration) -> Option<&'static str> {
     let s = &c.settings;
     if backend::of(s.accel).own_threads() {
         Some("the backend's own threads")
@@ -111,65 +112,30 @@ pub fn run(request: &CountRequest<'_>) -> Result<(), Error> {
     if todo.is_empty() {
         return Err(Error::Input(format!("{}: no single-thread configuration to count", exp.path.display())));
     }
-    // Longest first, so the jobs finish together.
-    let cores = crate::plan::available_threads();
-    let mut order: Vec<usize> = (0..todo.len()).collect();
-    let estimate = |i: usize| plan::estimate_seconds(&image_settings(todo[i], request.image), cores);
-    order.sort_by(|a, b| estimate(*b).total_cmp(&estimate(*a)));
-
     let exe = std::env::current_exe().map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
     let provenance = Provenance::collect();
     let started = Instant::now();
-    let next = AtomicUsize::new(0);
-    // Each configuration's build and trace counts, by position in `todo`, as the jobs finish them.
-    type Counted = Option<Result<[InstructionCount; 2], Error>>;
-    let results: Mutex<Vec<Counted>> = Mutex::new((0..todo.len()).map(|_| None).collect());
-    let job = || {
-        loop {
-            let n = next.fetch_add(1, Ordering::SeqCst);
-            let Some(&i) = order.get(n) else { break };
-            let c = todo[i];
-            let t = Instant::now();
-            let counted = count_one(&exe, &plan, c, request, &dumps).map(|counts| {
-                counts.map(|(phase, ir, misses)| InstructionCount {
-                    config_id: c.id.clone(),
-                    series: c.series.clone(),
-                    objects: c.settings.objects,
-                    width: image_settings(c, request.image).width,
-                    height: image_settings(c, request.image).height,
-                    phase: phase.to_string(),
-                    instructions: ir,
-                    d1_misses: misses.map(|m| m.0),
-                    ll_misses: misses.map(|m| m.1),
-                    rustc: provenance.rustc.clone(),
-                    target_features: provenance.machine.target_features.clone(),
-                    valgrind: valgrind.clone(),
-                    git_commit: provenance.git_commit.clone(),
-                    git_dirty: provenance.git_dirty,
-                })
-            });
-            match &counted {
-                Ok([b, tr]) => note!(
-                    "counted {} objects {}: build {} trace {} instructions ({:.1} s)",
-                    c.series,
-                    c.settings.objects,
-                    b.instructions,
-                    tr.instructions,
-                    t.elapsed().as_secs_f64()
-                ),
-                Err(e) => note!("FAILED {} objects {}: {e}", c.series, c.settings.objects),
-            }
-            results.lock().expect("no job panics")[i] = Some(counted);
-        }
-    };
-    std::thread::scope(|scope| {
-        for _ in 0..request.jobs.clamp(1, todo.len()) {
-            scope.spawn(job);
-        }
-    });
+    let how = How { image: request.image, cache_sim: request.cache_sim };
+    let results = count_each(&exe, &plan, &todo, how, &dumps, request.jobs);
     let mut counts = Vec::new();
-    for result in results.into_inner().expect("no job panics") {
-        counts.extend(result.expect("every configuration ran")?);
+    for (c, result) in todo.iter().zip(results) {
+        let (phases, _) = result?;
+        counts.extend(phases.map(|(phase, ir, misses)| InstructionCount {
+            config_id: c.id.clone(),
+            series: c.series.clone(),
+            objects: c.settings.objects,
+            width: image_settings(c, request.image).width,
+            height: image_settings(c, request.image).height,
+            phase: phase.to_string(),
+            instructions: ir,
+            d1_misses: misses.map(|m| m.0),
+            ll_misses: misses.map(|m| m.1),
+            rustc: provenance.rustc.clone(),
+            target_features: provenance.machine.target_features.clone(),
+            valgrind: valgrind.clone(),
+            git_commit: provenance.git_commit.clone(),
+            git_dirty: provenance.git_dirty,
+        }));
     }
     let path = dir.join(instructions::FILE);
     instructions::write(&path, &counts).map_err(|e| Error::Run(e.to_string()))?;
@@ -182,6 +148,60 @@ pub fn run(request: &CountRequest<'_>) -> Result<(), Error> {
         path.display()
     );
     Ok(())
+}
+
+/// How configurations are counted: at their own image size or `image`, with or without simulated caches.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct How {
+    pub image: Option<(u32, u32)>,
+    pub cache_sim: bool,
+}
+
+/// One configuration's counted phases and the worker's answer (its answer hash and tree statistics).
+pub(crate) type Counted = Result<(PhaseCounts, Timing), Error>;
+
+/// Counts each of `todo` with the harness binary `exe` (its `worker`), `jobs` valgrind processes at once, longest
+/// first; the results in `todo`'s order, each printed as it finishes.
+pub(crate) fn count_each(
+    exe: &Path,
+    plan: &Plan,
+    todo: &[&Configuration],
+    how: How,
+    dumps: &Path,
+    jobs: usize,
+) -> Vec<Counted> {
+    // Longest first, so the jobs finish together.
+    let cores = crate::plan::available_threads();
+    let mut order: Vec<usize> = (0..todo.len()).collect();
+    let estimate = |i: usize| plan::estimate_seconds(&image_settings(todo[i], how.image), cores);
+    order.sort_by(|a, b| estimate(*b).total_cmp(&estimate(*a)));
+    let next = AtomicUsize::new(0);
+    let results: Mutex<Vec<Option<Counted>>> = Mutex::new((0..todo.len()).map(|_| None).collect());
+    let job = || {
+        loop {
+            let n = next.fetch_add(1, Ordering::SeqCst);
+            let Some(&i) = order.get(n) else { break };
+            let c = todo[i];
+            let t = Instant::now();
+            let counted = count_one(exe, plan, c, how, dumps);
+            match &counted {
+                Ok(([(_, build, _), (_, trace, _)], _)) => note!(
+                    "counted {} objects {}: build {build} trace {trace} instructions ({:.1} s)",
+                    c.series,
+                    c.settings.objects,
+                    t.elapsed().as_secs_f64()
+                ),
+                Err(e) => note!("FAILED {} objects {}: {e}", c.series, c.settings.objects),
+            }
+            results.lock().expect("no job panics")[i] = Some(counted);
+        }
+    };
+    std::thread::scope(|scope| {
+        for _ in 0..jobs.clamp(1, todo.len().max(1)) {
+            scope.spawn(job);
+        }
+    });
+    results.into_inner().expect("no job panics").into_iter().map(|r| r.expect("every configuration ran")).collect()
 }
 
 /// The settings a configuration is counted with (at `image`, when given).
@@ -208,19 +228,13 @@ pub fn valgrind_version() -> Result<String, Error> {
 }
 
 /// Instructions, and (with a cache simulation) D1 and last-level misses, of each phase.
-type PhaseCounts = [(&'static str, u64, Option<(u64, u64)>); 2];
+pub(crate) type PhaseCounts = [(&'static str, u64, Option<(u64, u64)>); 2];
 
 /// Runs one configuration in a worker under callgrind; returns its phases' counts. The dumps stay in `dumps`
 /// as `<config id>-<phase>.callgrind` (for `callgrind_annotate`).
-fn count_one(
-    exe: &Path,
-    plan: &Plan,
-    c: &Configuration,
-    request: &CountRequest<'_>,
-    dumps: &Path,
-) -> Result<PhaseCounts, Error> {
+fn count_one(exe: &Path, plan: &Plan, c: &Configuration, how: How, dumps: &Path) -> Counted {
     let mut worker = worker_request(plan, c);
-    worker.settings = image_settings(c, request.image);
+    worker.settings = image_settings(c, how.image);
     let out = dumps.join(format!("{}.callgrind", c.id));
     let mut cmd = Command::new("valgrind");
     cmd.arg("--tool=callgrind")
@@ -228,24 +242,27 @@ fn count_one(
         .arg("--collect-atstart=no")
         .args(PHASES.iter().map(|(_, f)| format!("--toggle-collect=*{f}*")))
         .args(PHASES.iter().map(|(_, f)| format!("--dump-after=*::{f}*")));
-    if request.cache_sim {
+    if how.cache_sim {
         cmd.arg("--cache-sim=yes").args(CACHES);
     }
     cmd.arg(exe).arg("worker").stdin(Stdio::piped()).stdout(Stdio::piped()).stderr(Stdio::piped());
     let fail = |why: String| Error::Run(format!("{} objects {}: callgrind: {why}", c.series, c.settings.objects));
     let mut child = cmd.spawn().map_err(|e| fail(format!("cannot start valgrind: {e}")))?;
-    let json = serde_json::to_string(&worker).expect("settings serialize");
+    let json = crate::run::worker::request_line(&worker);
     {
         let mut stdin = child.stdin.take().expect("piped");
         writeln!(stdin, "{json}").map_err(|e| fail(format!("cannot send the request: {e}")))?;
     } // end of input: the worker answers and exits
     let output = child.wait_with_output().map_err(|e| fail(e.to_string()))?;
     let answered = String::from_utf8_lossy(&output.stdout);
-    if !output.status.success() || serde_json::from_str::<crate::run::measure::Timing>(answered.trim()).is_err() {
-        let stderr = String::from_utf8_lossy(&output.stderr);
-        let last: Vec<&str> = stderr.lines().filter(|l| !l.starts_with("==")).collect();
-        return Err(fail(format!("the worker failed ({}): {}", output.status, last.join(" ").trim())));
-    }
+    let timing = match serde_json::from_str::<Timing>(answered.trim()) {
+        Ok(timing) if output.status.success() => timing,
+        _ => {
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            let last: Vec<&str> = stderr.lines().filter(|l| !l.starts_with("==")).collect();
+            return Err(fail(format!("the worker failed ({}): {}", output.status, last.join(" ").trim())));
+        }
+    };
     // Dumps `out.1`, `out.2`, … in the order the phases ended; `out` itself is the (empty) final dump.
     let mut found: Vec<Option<DumpTotals>> = vec![None; PHASES.len()];
     for part in 1.. {
@@ -272,7 +289,7 @@ fn count_one(
         };
         counts[p] = (phase, ir, misses);
     }
-    Ok(counts)
+    Ok((counts, timing))
 }
 
 /// A callgrind dump's instructions and, with a cache simulation, its (D1 misses, last-level misses).

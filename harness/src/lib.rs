@@ -6,6 +6,7 @@
 mod output;
 mod ab;
 mod backend;
+mod backfill;
 mod baseline;
 mod check;
 mod cli;
@@ -18,6 +19,7 @@ pub mod meshes;
 pub mod peers;
 mod plan;
 mod render;
+mod revision;
 mod rows;
 pub mod run;
 mod slurm;
@@ -30,7 +32,9 @@ use std::process::ExitCode;
 use clap::Parser;
 use report::spec::Verdict;
 
-use cli::{BaselineCommand, CheckArgs, Command, HistoryCommand, ReportArgs, RunArgs, SlurmCommand, ValidateArgs};
+use cli::{
+    BaselineCommand, CheckArgs, Command, HistoryCommand, ReportArgs, RunArgs, SiteArgs, SlurmCommand, ValidateArgs,
+};
 use config::{Experiment, Repetitions};
 use error::Error;
 use plan::Plan;
@@ -54,9 +58,19 @@ pub fn main() -> ExitCode {
             jobs: args.jobs.map_or_else(plan::available_threads, |j| j as usize),
         }),
         Command::History(HistoryCommand::Append { run_dir, dir }) => history_append(&run_dir, &dir),
+        Command::History(HistoryCommand::Backfill(args)) => backfill::run(&backfill::BackfillRequest {
+            range: &args.range,
+            every: args.every as usize,
+            config: &args.config,
+            quick: args.quick,
+            dir: &args.dir,
+            timings: args.timings,
+            jobs: args.jobs.map_or_else(plan::available_threads, |j| j as usize),
+        }),
         Command::History(HistoryCommand::Plot { dir }) => report::history::plot(&dir)
             .map(|files| files.iter().for_each(|f| say!("{}", f.display())))
             .map_err(|e| Error::Input(e.to_string())),
+        Command::Site(args) => site_command(&args),
         Command::Ab(args) => ab::run(&ab::AbRequest {
             base: &args.base,
             config: &args.config,
@@ -232,6 +246,23 @@ fn report_command(args: &ReportArgs) -> Result<(), Error> {
     }
     let exp = Experiment::load(&path)?;
     write_report(&args.dir, &exp, vec![]).map(|_| ())
+}
+
+/// Writes the static site of `--results` into `--out`: every experiment folder with its experiment.toml's spec.
+fn site_command(args: &SiteArgs) -> Result<(), Error> {
+    if !args.results.is_dir() {
+        return Err(Error::Input(format!("{}: no such results folder", args.results.display())));
+    }
+    let dirs = report::site::experiment_dirs(&args.results).map_err(|e| Error::Input(e.to_string()))?;
+    let mut experiments = Vec::new();
+    for dir in dirs {
+        let exp = Experiment::load(&dir.join(run::CONFIG_COPY))?;
+        experiments.push((dir, exp.report_spec(vec![])));
+    }
+    let files = report::site::write(&experiments, &args.results.join("history"), &args.out)
+        .map_err(|e| Error::Run(e.to_string()))?;
+    say!("site: {} pages and files, open {}", files.len(), args.out.join("index.html").display());
+    Ok(())
 }
 
 fn validate_command(args: &ValidateArgs) -> Result<(), Error> {

@@ -2,6 +2,7 @@
 //! experiment of every speedup over the appended commits, regressions and change points marked.
 
 pub mod change_points;
+pub mod commits;
 
 use schema::column;
 use std::collections::BTreeMap;
@@ -22,20 +23,31 @@ pub const REGRESSION: f64 = 0.10;
 
 /// One line of `history.csv` (the header names these fields).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-struct Entry {
-    experiment: String,
-    commit: String,
-    dirty: String,
-    timestamp: String,
-    series: String,
-    point: String,
-    speedup: f64,
-    lower: f64,
-    upper: f64,
-    counters: String,
+pub(crate) struct Entry {
+    pub experiment: String,
+    pub commit: String,
+    pub dirty: String,
+    pub timestamp: String,
+    pub series: String,
+    pub point: String,
+    pub speedup: f64,
+    pub lower: f64,
+    pub upper: f64,
+    pub counters: String,
 }
 
-fn read(path: &Path) -> Result<Vec<Entry>, Error> {
+/// Whether `after` is a regression from `before`: a drop of more than [`REGRESSION`], beyond both intervals.
+pub(crate) fn dropped(before: &Entry, after: &Entry) -> bool {
+    after.speedup < before.speedup * (1.0 - REGRESSION) && after.upper < before.lower
+}
+
+/// The seed of the change-point search of one tracked speedup.
+pub(crate) fn change_seed(experiment: &str, series: &str, point: &str) -> u64 {
+    seed_for(&format!("history change points {experiment} {series} {point}"))
+}
+
+/// The lines of a `history.csv` (none when the file is missing).
+pub(crate) fn read(path: &Path) -> Result<Vec<Entry>, Error> {
     let Ok(text) = std::fs::read_to_string(path) else { return Ok(vec![]) };
     csv::Reader::from_reader(text.as_bytes())
         .deserialize()
@@ -120,7 +132,8 @@ struct Change {
 pub fn plot(history_dir: &Path) -> Result<Vec<PathBuf>, Error> {
     let path = history_dir.join("history.csv");
     let entries = read(&path)?;
-    if entries.is_empty() {
+    let per_commit = commits::markdown(history_dir)?;
+    if entries.is_empty() && per_commit.is_none() {
         return Err(Error::NoRows { path });
     }
     let p = change_points::DEFAULT;
@@ -178,12 +191,12 @@ pub fn plot(history_dir: &Path) -> Result<Vec<PathBuf>, Error> {
                 .collect();
             for pair in track.windows(2) {
                 let (before, after) = (pair[0], pair[1]);
-                if after.speedup < before.speedup * (1.0 - REGRESSION) && after.upper < before.lower {
+                if dropped(before, after) {
                     regressions.push((run_of(after) as f64, after.speedup));
                 }
             }
             let speedups: Vec<f64> = track.iter().map(|e| e.speedup).collect();
-            let seed = seed_for(&format!("history change points {experiment} {series} {point}"));
+            let seed = change_seed(&experiment, series, point);
             for found in change_points::detect(&speedups, &p, seed) {
                 let (run, speedup) = (run_of(track[found.index]), track[found.index].speedup);
                 changes.push(Change { series: series.clone(), point: point.clone(), run, speedup, found });
@@ -245,6 +258,7 @@ pub fn plot(history_dir: &Path) -> Result<Vec<PathBuf>, Error> {
         md.push('\n');
         files.extend([svg, png]);
     }
+    md.push_str(&per_commit.unwrap_or_default());
     let md_path = history_dir.join("HISTORY.md");
     std::fs::write(&md_path, md).map_err(|e| Error::write(&md_path, e))?;
     files.push(md_path);

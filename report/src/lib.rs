@@ -16,6 +16,7 @@ pub(crate) mod figures;
 mod markdown;
 mod pool;
 mod rows;
+pub mod site;
 pub mod stats;
 mod summary;
 

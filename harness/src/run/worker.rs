@@ -28,6 +28,21 @@ pub struct WorkerRequest {
     pub sphere_file: Option<PathBuf>,
 }
 
+/// The JSON line of a request: today's settings, and beside them the ones earlier revisions named otherwise (a
+/// worker ignores fields its schema does not declare, but needs every one it does): `packet_size`, the rays traced
+/// together, which 96801f6 split into `packet` (the wide BVH's) and `embree_packet`; `0` where neither applies.
+pub fn request_line(request: &WorkerRequest) -> String {
+    let mut json = serde_json::to_value(request).expect("settings serialize");
+    let s = &request.settings;
+    let embree = s.embree_packet.and_then(|p| schema::AxisType::number(&p)).map(|n| n as u32);
+    let packet_size = s.packet.map(|p| p.rays()).or(embree).unwrap_or(0);
+    json["settings"]["packet_size"] = serde_json::Value::String(packet_size.to_string());
+    json.to_string()
+}
+
+/// Today's settings an earlier revision declared under another name: (today's, then).
+pub const RENAMED: [(&str, &str); 2] = [("packet", "packet_size"), ("embree_packet", "packet_size")];
+
 /// The state a worker keeps between requests for the same configuration.
 struct Session {
     request: WorkerRequest,
@@ -109,7 +124,7 @@ impl Worker {
     }
 
     fn send(&mut self, request: &WorkerRequest) {
-        let json = serde_json::to_string(request).expect("settings serialize");
+        let json = request_line(request);
         if let Some(stdin) = self.stdin.as_mut()
             && writeln!(stdin, "{json}").and_then(|()| stdin.flush()).is_err()
         {
@@ -162,6 +177,28 @@ pub fn time(binary: &Path, dir: Option<&Path>, request: &WorkerRequest) -> Resul
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn requests_carry_the_packet_size_earlier_revisions_declared() {
+        let mut s = Settings::default().normalized();
+        let line = |s: &Settings| {
+            let json: serde_json::Value =
+                serde_json::from_str(&request_line(&WorkerRequest { settings: s.clone(), sphere_file: None })).unwrap();
+            assert_eq!(
+                serde_json::from_value::<WorkerRequest>(json.clone()).unwrap().settings,
+                *s,
+                "today's worker reads it as it is"
+            );
+            json["settings"]["packet_size"].as_str().unwrap().to_string()
+        };
+        assert_eq!(line(&s), "0", "no packets on the flat BVH");
+        s.accel = schema::Accel::Ours(tracer::accel::AccelKind::WideBvh);
+        s.workload = schema::Workload::Rays(tracer::rays::RayKind::Primary);
+        for (packet, rays) in [("single", "1"), ("masked-8", "8"), ("masked-16", "16"), ("tile-8x8", "64")] {
+            s.packet = Some(<schema::Packet as schema::Named>::from_name(packet).unwrap());
+            assert_eq!(line(&s.clone().normalized()), rays, "{packet}");
+        }
+    }
 
     #[test]
     fn requests_round_trip_through_json() {

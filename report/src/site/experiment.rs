@@ -1,0 +1,252 @@
+//! One experiment's page: provenance, claims with verdicts, each `[[plot]]` as an interactive chart, and the
+//! summary table (the frame of `summary.csv`), sortable.
+
+use std::path::{Path, PathBuf};
+
+use polars_core::prelude::{DataFrame, DataType};
+use schema::column;
+
+use super::chart::SiteChart;
+use super::html::{escape, json_script, num};
+use crate::claims::{self, ClaimResult};
+use crate::error::Error;
+use crate::figures;
+use crate::rows::{self, Rows, Run};
+use crate::spec::{ReportSpec, Verdict};
+use crate::summary;
+
+/// An experiment folder read for the site: its spec, rows, claim verdicts and summary.
+pub struct Experiment {
+    /// The folder under results/.
+    pub dir: PathBuf,
+    /// The folder's name, which names its page.
+    pub name: String,
+    pub spec: ReportSpec,
+    pub rows: Rows,
+    pub claims: Vec<ClaimResult>,
+    pub summary: DataFrame,
+}
+
+impl Experiment {
+    /// Reads `dir/runs.csv` and computes what REPORT.md shows from it.
+    pub fn read(dir: &Path, spec: &ReportSpec) -> Result<Experiment, Error> {
+        let runs_csv = dir.join("runs.csv");
+        let rows = rows::read(&runs_csv)?;
+        let summary = summary::summarise(&rows, spec).map_err(|e| Error::read(&runs_csv, e))?;
+        let claims = claims::check_all(&rows, spec);
+        let name = dir.file_name().map_or_else(|| spec.name.clone(), |n| n.to_string_lossy().into_owned());
+        Ok(Experiment { dir: dir.into(), name, spec: spec.clone(), rows, claims, summary })
+    }
+
+    /// The page's file name.
+    pub fn page(&self) -> String {
+        format!("{}.html", self.name)
+    }
+
+    /// Distinct values of a text column over the timed rows, in order of appearance.
+    pub fn distinct(&self, column: &str) -> Vec<String> {
+        distinct(&self.rows.runs, |r| r.text(column).to_string())
+    }
+
+    /// Distinct machines as `cpu_model (machine_id)`.
+    pub fn machines(&self) -> Vec<String> {
+        distinct(&self.rows.runs, |r| format!("{} ({})", r.text(column::cpu_model), r.text(column::machine_id)))
+    }
+}
+
+fn distinct(runs: &[Run], value: impl Fn(&Run) -> String) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for run in runs {
+        let v = value(run);
+        if !out.contains(&v) {
+            out.push(v);
+        }
+    }
+    out
+}
+
+/// A verdict's word and CSS class.
+pub fn verdict_word(verdict: Verdict) -> &'static str {
+    match verdict {
+        Verdict::Holds => "holds",
+        Verdict::Fails => "fails",
+        Verdict::Inconclusive => "inconclusive",
+    }
+}
+
+/// A verdict as a coloured badge.
+pub fn badge(verdict: Verdict) -> String {
+    let word = verdict_word(verdict);
+    format!("<span class=\"verdict {word}\">{word}</span>")
+}
+
+/// The page's body; copies the committed figures next to it (`<name>/figures/`). Returns the body and the files
+/// copied.
+pub fn body(exp: &Experiment, out_dir: &Path) -> Result<(String, Vec<PathBuf>), Error> {
+    let mut html =
+        format!("<h1>{}</h1>\n<p class=\"description\">{}</p>\n", escape(&exp.name), escape(&exp.spec.description));
+    html.push_str(&provenance(exp));
+    html.push_str(&claims_table(&exp.claims));
+    let (figures_html, copied) = figures_section(exp, out_dir)?;
+    html.push_str(&figures_html);
+    html.push_str(
+        "<h2 id=\"summary\">Summary</h2>\n<p>One row per configuration and machine, as <code>summary.csv</code> \
+                   (medians with their 95% bootstrap intervals); click a header to sort.</p>\n",
+    );
+    html.push_str(&summary_table(&exp.summary));
+    Ok((html, copied))
+}
+
+fn provenance(exp: &Experiment) -> String {
+    let list = |values: Vec<String>| values.iter().map(|v| escape(v)).collect::<Vec<_>>().join("<br>");
+    let mut html = String::from("<dl class=\"provenance\">\n");
+    html.push_str(&format!("<dt>machine</dt><dd>{}</dd>\n", list(exp.machines())));
+    html.push_str(&format!("<dt>commit</dt><dd>{}</dd>\n", list(exp.distinct(column::git_commit))));
+    html.push_str(&format!("<dt>rustc</dt><dd>{}</dd>\n", list(exp.distinct(column::rustc))));
+    html.push_str(&format!(
+        "<dt>runs</dt><dd>{} timed{}</dd>\n",
+        exp.rows.runs.len(),
+        if exp.rows.failed.is_empty() {
+            String::new()
+        } else {
+            format!(", {} failed validation", exp.rows.failed.len())
+        }
+    ));
+    html.push_str("</dl>\n");
+    html
+}
+
+fn claims_table(claims: &[ClaimResult]) -> String {
+    if claims.is_empty() {
+        return "<h2 id=\"claims\">Claims</h2>\n<p>None.</p>\n".into();
+    }
+    let mut html = String::from(
+        "<h2 id=\"claims\">Claims</h2>\n<table class=\"claims\"><thead><tr><th>verdict</th><th>claim</th>\
+         <th>ratio at the least favourable point [95% interval]</th><th>threshold</th><th>points</th></tr></thead><tbody>\n",
+    );
+    for c in claims {
+        let points: String = c
+            .points
+            .iter()
+            .map(|p| {
+                format!(
+                    "<tr><td>{}</td><td>{}</td><td>{} [{}, {}]</td><td>{}</td></tr>",
+                    badge(p.verdict),
+                    escape(&p.label),
+                    num(p.ratio),
+                    num(p.lo),
+                    num(p.hi),
+                    num(p.threshold)
+                )
+            })
+            .collect();
+        html.push_str(&format!(
+            "<tr><td>{}</td><td>{}</td><td>{} [{}, {}]</td><td>{}</td><td><details><summary>{}</summary>\
+             <table class=\"points\"><tbody>{points}</tbody></table></details></td></tr>\n",
+            badge(c.verdict),
+            escape(&c.text),
+            num(c.ratio),
+            num(c.lo),
+            num(c.hi),
+            num(c.threshold),
+            escape(&c.detail)
+        ));
+    }
+    html.push_str("</tbody></table>\n");
+    html
+}
+
+/// The charts of every `[[plot]]`, each point's tooltip naming series, x, median, interval, n, commit and machine.
+pub fn charts(exp: &Experiment) -> Vec<SiteChart> {
+    exp.spec
+        .plots
+        .iter()
+        .map(|plot| {
+            let figure = figures::figure_of(&exp.rows, &exp.spec, plot);
+            let chart = &figure.chart;
+            SiteChart::of(chart, |i, j| {
+                let (line, p, prov) = (&chart.lines[i], &chart.lines[i].points[j], &figure.provenance[i][j]);
+                vec![
+                    line.label.clone(),
+                    format!("{}: {}", chart.x_label, num(p.x)),
+                    format!("median {}", num(p.y)),
+                    format!("95% interval [{}, {}]", num(p.lo), num(p.hi)),
+                    format!("n {}", prov.n),
+                    format!("commit {}", prov.commits.join(", ")),
+                    format!("machine {}", prov.machines.join(", ")),
+                ]
+            })
+        })
+        .collect()
+}
+
+fn figures_section(exp: &Experiment, out_dir: &Path) -> Result<(String, Vec<PathBuf>), Error> {
+    if exp.spec.plots.is_empty() {
+        return Ok((String::new(), vec![]));
+    }
+    let mut html = String::from(
+        "<h2 id=\"figures\">Figures</h2>\n<p>Hover a point for its numbers; click a legend entry \
+                                 to hide or show its series.</p>\n",
+    );
+    let mut copied = Vec::new();
+    let figures_out = out_dir.join(&exp.name).join("figures");
+    for (k, (plot, chart)) in exp.spec.plots.iter().zip(charts(exp)).enumerate() {
+        html.push_str(&chart.element(&format!("chart-{k}")));
+        let mut links = Vec::new();
+        for ext in ["svg", "png"] {
+            let source = exp.dir.join("figures").join(format!("{}.{ext}", plot.file));
+            if source.is_file() {
+                std::fs::create_dir_all(&figures_out).map_err(|e| Error::write(&figures_out, e))?;
+                let target = figures_out.join(format!("{}.{ext}", plot.file));
+                std::fs::copy(&source, &target).map_err(|e| Error::write(&target, e))?;
+                links.push(format!("<a href=\"{}/figures/{}.{ext}\">{ext}</a>", escape(&exp.name), escape(&plot.file)));
+                copied.push(target);
+            }
+        }
+        if !links.is_empty() {
+            html.push_str(&format!("<p class=\"figure-links\">Report figure: {}</p>\n", links.join(" · ")));
+        }
+    }
+    Ok((html, copied))
+}
+
+/// The summary frame as a sortable table's data: columns equal in every row are listed once above it.
+pub fn summary_json(frame: &DataFrame) -> serde_json::Value {
+    let mut columns = Vec::new();
+    let mut constant = Vec::new();
+    let mut values: Vec<Vec<serde_json::Value>> = Vec::new();
+    for c in frame.columns() {
+        let numeric = c.dtype().is_primitive_numeric();
+        let cells: Vec<serde_json::Value> = if numeric {
+            match c.cast(&DataType::Float64).and_then(|c| c.f64().map(|a| a.iter().collect::<Vec<_>>())) {
+                Ok(v) => v.into_iter().map(|v| v.map_or(serde_json::Value::Null, serde_json::Value::from)).collect(),
+                Err(_) => continue,
+            }
+        } else {
+            match c
+                .cast(&DataType::String)
+                .and_then(|c| c.str().map(|a| a.iter().map(|v| v.map(String::from)).collect::<Vec<_>>()))
+            {
+                Ok(v) => v.into_iter().map(|v| serde_json::Value::from(v.unwrap_or_default())).collect(),
+                Err(_) => continue,
+            }
+        };
+        let name = c.name().to_string();
+        if frame.height() > 1 && cells.iter().all(|v| *v == cells[0]) && name != column::config_id {
+            constant.push(serde_json::json!([name, cells[0]]));
+            continue;
+        }
+        columns.push(serde_json::json!({ "name": name, "numeric": numeric }));
+        values.push(cells);
+    }
+    let rows: Vec<Vec<serde_json::Value>> =
+        (0..frame.height()).map(|i| values.iter().map(|column| column[i].clone()).collect()).collect();
+    serde_json::json!({ "columns": columns, "constant": constant, "rows": rows })
+}
+
+fn summary_table(frame: &DataFrame) -> String {
+    format!(
+        "<div class=\"table\" data-source=\"summary-data\"></div>\n{}",
+        json_script("summary-data", &summary_json(frame))
+    )
+}
