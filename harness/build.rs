@@ -183,11 +183,14 @@ mod tinybvh {
             .collect()
     }
 
-    /// The folder of `tiny_bvh.h` in the `tinybvh-rs` package that cargo resolved for this workspace.
+    /// The folder of `tiny_bvh.h` in the `tinybvh-rs` package that cargo resolved for this workspace. Only the
+    /// target's packages are asked for (`--filter-platform`): offline, cargo has downloaded no others (a fresh
+    /// registry lacks e.g. the Windows-only ones the lock file lists).
     fn header_dir(manifest_dir: &Path) -> PathBuf {
         let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let target = std::env::var("TARGET").expect("cargo sets TARGET for build scripts");
         let output = Command::new(cargo)
-            .args(["metadata", "--format-version", "1", "--offline", "--manifest-path"])
+            .args(["metadata", "--format-version", "1", "--offline", "--filter-platform", &target, "--manifest-path"])
             .arg(manifest_dir.join("Cargo.toml"))
             .output()
             .expect("run cargo metadata");

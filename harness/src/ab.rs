@@ -261,6 +261,14 @@ fn build_once(root: &Path, build: &Build, rev: &str, ab: &Path) -> Result<Option
     // A fresh checkout: its files are newer than the artifacts of any earlier base build, which have the same
     // names (cargo decides freshness by mtime).
     let tree = Worktree::add(root, ab.join(&name), rev)?;
+    // Every package of the revision's lock file, for every platform: the harness's build script from 6ca80e1 until
+    // it passed `--filter-platform` ran `cargo metadata --offline` over all of them, which fails where cargo has
+    // downloaded only the host's. Without a network the build says what is missing.
+    let fetched =
+        Command::new(cargo()).current_dir(&tree.path).args(["fetch", "--quiet"]).stdin(Stdio::null()).status();
+    if !fetched.is_ok_and(|s| s.success()) {
+        note!("ab: `cargo fetch` failed in the worktree of {rev}: building with the packages at hand");
+    }
     let (options, profile) = build.profile();
     let mut cmd = Command::new(cargo());
     cmd.current_dir(&tree.path)

@@ -1,7 +1,8 @@
 //! `harness site` in a real headless browser (Debian's `chromium`, driven over the DevTools protocol on its debugging
-//! pipe): the site built from the committed results/ loads every page without console errors and within a second,
-//! the index links every experiment, hovering a known point shows its median from summary.csv, chart titles and
-//! legends stay clear of the plot (and axis titles of tick labels), and no page's screenshot is blank. Skipped without chromium, unless
+//! pipe): the site built from the committed results/ loads every page without console errors (each page's load
+//! time is printed, not asserted: speed is measured, never gated by a test), the index links every experiment,
+//! hovering a known point shows its median from summary.csv, chart titles and legends stay clear of the plot (and
+//! axis titles of tick labels), and no page's screenshot is blank. Skipped without chromium, unless
 //! `BVHLAB_REQUIRE_BROWSER=1` (CI).
 
 use std::fs::File;
@@ -291,7 +292,6 @@ fn the_site_of_the_committed_results_works_in_a_browser() {
         if load_ms > slowest.0 {
             slowest = (load_ms, page.clone());
         }
-        assert!(load_ms < 1000.0, "{page} loaded in {load_ms:.0} ms");
         let layout = browser.eval(
             "Array.from(document.querySelectorAll('figure.chart')).flatMap(f => {
                 const box = (e) => e.getBoundingClientRect();

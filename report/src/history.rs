@@ -37,13 +37,77 @@ pub(crate) struct Entry {
 }
 
 /// Whether `after` is a regression from `before`: a drop of more than [`REGRESSION`], beyond both intervals.
-pub(crate) fn dropped(before: &Entry, after: &Entry) -> bool {
+fn dropped(before: &Entry, after: &Entry) -> bool {
     after.speedup < before.speedup * (1.0 - REGRESSION) && after.upper < before.lower
 }
 
-/// The seed of the change-point search of one tracked speedup.
-pub(crate) fn change_seed(experiment: &str, series: &str, point: &str) -> u64 {
-    seed_for(&format!("history change points {experiment} {series} {point}"))
+/// One appended run of an experiment: its commit, time, dirty flag and counters' fingerprint.
+pub(crate) struct AppendedRun {
+    pub commit: String,
+    pub timestamp: String,
+    pub dirty: String,
+    pub counters: String,
+}
+
+/// One tracked speedup (series and point) over an experiment's appended runs.
+pub(crate) struct SpeedupTrack<'a> {
+    pub series: String,
+    pub point: String,
+    /// The track's entries in order, each with its run's number (1-based, into [`SpeedupHistory::runs`]).
+    pub entries: Vec<(usize, &'a Entry)>,
+    /// Indices into `entries` of regressions: drops from the previous entry (see [`REGRESSION`]).
+    pub regressions: Vec<usize>,
+    /// Changes of level found by [`change_points::detect`] with [`change_points::DEFAULT`] (indices into `entries`).
+    pub change_points: Vec<change_points::ChangePoint>,
+}
+
+/// One experiment's speedup history: its appended runs in order and every tracked speedup over them.
+pub(crate) struct SpeedupHistory<'a> {
+    pub experiment: String,
+    pub runs: Vec<AppendedRun>,
+    pub tracks: Vec<SpeedupTrack<'a>>,
+}
+
+/// The speedup history of each experiment of `entries` (lines of `history.csv`), in order of appearance.
+pub(crate) fn speedup_histories(entries: &[Entry]) -> Vec<SpeedupHistory<'_>> {
+    let experiments = crate::distinct(entries.iter().map(|e| e.experiment.as_str()));
+    experiments
+        .into_iter()
+        .map(|experiment| {
+            let own: Vec<&Entry> = entries.iter().filter(|e| e.experiment == experiment).collect();
+            let keys = crate::distinct(own.iter().map(|e| (e.commit.as_str(), e.timestamp.as_str())));
+            let run_of =
+                |e: &Entry| 1 + keys.iter().position(|k| *k == (e.commit.as_str(), e.timestamp.as_str())).unwrap();
+            let runs = keys
+                .iter()
+                .map(|&(commit, timestamp)| {
+                    let first = own.iter().find(|e| e.commit == commit && e.timestamp == timestamp).unwrap();
+                    AppendedRun {
+                        commit: commit.into(),
+                        timestamp: timestamp.into(),
+                        dirty: first.dirty.clone(),
+                        counters: first.counters.clone(),
+                    }
+                })
+                .collect();
+            let tracks = crate::distinct(own.iter().map(|e| (e.series.as_str(), e.point.as_str())))
+                .into_iter()
+                .map(|(series, point)| {
+                    let entries: Vec<(usize, &Entry)> = own
+                        .iter()
+                        .filter(|e| e.series == series && e.point == point)
+                        .map(|e| (run_of(e), *e))
+                        .collect();
+                    let regressions = (1..entries.len()).filter(|&i| dropped(entries[i - 1].1, entries[i].1)).collect();
+                    let speedups: Vec<f64> = entries.iter().map(|(_, e)| e.speedup).collect();
+                    let seed = seed_for(&format!("history change points {experiment} {series} {point}"));
+                    let change_points = change_points::detect(&speedups, &change_points::DEFAULT, seed);
+                    SpeedupTrack { series: series.into(), point: point.into(), entries, regressions, change_points }
+                })
+                .collect();
+            SpeedupHistory { experiment: experiment.into(), runs, tracks }
+        })
+        .collect()
 }
 
 /// The lines of a `history.csv` (none when the file is missing).
@@ -157,57 +221,35 @@ pub fn plot(history_dir: &Path) -> Result<Vec<PathBuf>, Error> {
         p.min_segment,
         p.min_effect * 100.0
     ));
-    let experiments: Vec<String> = entries.iter().fold(Vec::new(), |mut v, e| {
-        if !v.contains(&e.experiment) {
-            v.push(e.experiment.clone());
-        }
-        v
-    });
-    for experiment in experiments {
-        let own: Vec<&Entry> = entries.iter().filter(|e| e.experiment == experiment).collect();
-        let mut runs: Vec<(String, String, String, String)> = Vec::new();
-        for e in &own {
-            let key = (e.commit.clone(), e.timestamp.clone(), e.dirty.clone(), e.counters.clone());
-            if !runs.contains(&key) {
-                runs.push(key);
-            }
-        }
-        let run_of = |e: &Entry| runs.iter().position(|r| r.0 == e.commit && r.1 == e.timestamp).unwrap() + 1;
+    for history in speedup_histories(&entries) {
+        let (experiment, runs) = (&history.experiment, &history.runs);
         let mut lines: Vec<Line> = Vec::new();
         let mut regressions: Vec<(f64, f64)> = Vec::new();
         let mut changes: Vec<Change> = Vec::new();
-        let mut tracks: Vec<(String, String)> = Vec::new();
-        for e in &own {
-            let t = (e.series.clone(), e.point.clone());
-            if !tracks.contains(&t) {
-                tracks.push(t);
-            }
-        }
-        for (i, (series, point)) in tracks.iter().enumerate() {
-            let track: Vec<&&Entry> = own.iter().filter(|e| &e.series == series && &e.point == point).collect();
+        for (i, track) in history.tracks.iter().enumerate() {
+            let at = |k: usize| (track.entries[k].0, track.entries[k].1.speedup);
             let points: Vec<ChartPoint> = track
+                .entries
                 .iter()
-                .map(|e| ChartPoint { x: run_of(e) as f64, y: e.speedup, lo: e.lower, hi: e.upper })
+                .map(|(run, e)| ChartPoint { x: *run as f64, y: e.speedup, lo: e.lower, hi: e.upper })
                 .collect();
-            for pair in track.windows(2) {
-                let (before, after) = (pair[0], pair[1]);
-                if dropped(before, after) {
-                    regressions.push((run_of(after) as f64, after.speedup));
-                }
+            regressions.extend(track.regressions.iter().map(|&k| (at(k).0 as f64, at(k).1)));
+            for found in &track.change_points {
+                let (run, speedup) = at(found.index);
+                let (series, point) = (track.series.clone(), track.point.clone());
+                changes.push(Change { series, point, run, speedup, found: *found });
             }
-            let speedups: Vec<f64> = track.iter().map(|e| e.speedup).collect();
-            let seed = change_seed(&experiment, series, point);
-            for found in change_points::detect(&speedups, &p, seed) {
-                let (run, speedup) = (run_of(track[found.index]), track[found.index].speedup);
-                changes.push(Change { series: series.clone(), point: point.clone(), run, speedup, found });
-            }
-            lines.push(Line { label: format!("{series} {point}"), style: i, points });
+            lines.push(Line { label: format!("{} {}", track.series, track.point), style: i, points });
         }
         changes.sort_by_key(|c| c.run);
         let mut rules: Vec<f64> = changes.iter().map(|c| c.run as f64 - 0.5).collect();
         rules.dedup();
         let overlay = Overlay {
-            x_ticks: runs.iter().enumerate().map(|(i, r)| ((i + 1) as f64, r.0.chars().take(7).collect())).collect(),
+            x_ticks: runs
+                .iter()
+                .enumerate()
+                .map(|(i, r)| ((i + 1) as f64, r.commit.chars().take(7).collect()))
+                .collect(),
             marks: vec![
                 Marks { label: "regression (drop > 10%)".into(), mark: Mark::Cross, points: regressions },
                 Marks {
@@ -240,7 +282,7 @@ pub fn plot(history_dir: &Path) -> Result<Vec<PathBuf>, Error> {
                 md.push_str(&format!(
                     "| {} | {} | {} | {} | {} → {} | {:.3} | {:.1}% |\n",
                     c.run,
-                    runs[c.run - 1].0,
+                    runs[c.run - 1].commit,
                     cell(&c.series),
                     cell(&c.point),
                     num(c.found.before),
@@ -253,7 +295,7 @@ pub fn plot(history_dir: &Path) -> Result<Vec<PathBuf>, Error> {
         }
         md.push_str("| run | commit | dirty | time | counters |\n|---|---|---|---|---|\n");
         for (i, r) in runs.iter().enumerate() {
-            md.push_str(&format!("| {} | {} | {} | {} | {} |\n", i + 1, r.0, r.2, r.1, r.3));
+            md.push_str(&format!("| {} | {} | {} | {} | {} |\n", i + 1, r.commit, r.dirty, r.timestamp, r.counters));
         }
         md.push('\n');
         files.extend([svg, png]);

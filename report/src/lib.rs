@@ -30,6 +30,17 @@ pub use claims::ClaimResult;
 pub use error::Error;
 use spec::ReportSpec;
 
+/// The distinct values of `values`, in order of appearance.
+pub(crate) fn distinct<T: PartialEq>(values: impl IntoIterator<Item = T>) -> Vec<T> {
+    let mut out = Vec::new();
+    for value in values {
+        if !out.contains(&value) {
+            out.push(value);
+        }
+    }
+    out
+}
+
 /// What `write` produced.
 #[derive(Clone, Debug)]
 pub struct Outcome {

@@ -35,18 +35,11 @@ pub struct Provenance {
 impl Provenance {
     /// The provenance of `group`.
     pub fn of(group: &[&Run]) -> Provenance {
-        let mut p = Provenance { n: group.len(), ..Provenance::default() };
-        for run in group {
-            let commit = run.text(column::git_commit).to_string();
-            let machine = format!("{} ({})", run.text(column::cpu_model), run.text(column::machine_id));
-            if !p.commits.contains(&commit) {
-                p.commits.push(commit);
-            }
-            if !p.machines.contains(&machine) {
-                p.machines.push(machine);
-            }
+        Provenance {
+            n: group.len(),
+            commits: crate::distinct(group.iter().map(|r| r.text(column::git_commit).to_string())),
+            machines: crate::distinct(group.iter().map(|r| r.machine())),
         }
-        p
     }
 }
 

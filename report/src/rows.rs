@@ -65,6 +65,11 @@ impl Run {
         index_of(column).map_or(f64::NAN, |i| self.num[i])
     }
 
+    /// The machine that ran it, as `cpu_model (machine_id)`.
+    pub fn machine(&self) -> String {
+        format!("{} ({})", self.text(schema::column::cpu_model), self.text(schema::column::machine_id))
+    }
+
     /// The configuration id.
     pub fn config_id(&self) -> &str {
         &self.row.config_id

@@ -45,24 +45,13 @@ impl Experiment {
 
     /// Distinct values of a text column over the timed rows, in order of appearance.
     pub fn distinct(&self, column: &str) -> Vec<String> {
-        distinct(&self.rows.runs, |r| r.text(column).to_string())
+        crate::distinct(self.rows.runs.iter().map(|r| r.text(column).to_string()))
     }
 
-    /// Distinct machines as `cpu_model (machine_id)`.
+    /// Distinct machines (see [`Run::machine`]), in order of appearance.
     pub fn machines(&self) -> Vec<String> {
-        distinct(&self.rows.runs, |r| format!("{} ({})", r.text(column::cpu_model), r.text(column::machine_id)))
+        crate::distinct(self.rows.runs.iter().map(Run::machine))
     }
-}
-
-fn distinct(runs: &[Run], value: impl Fn(&Run) -> String) -> Vec<String> {
-    let mut out: Vec<String> = Vec::new();
-    for run in runs {
-        let v = value(run);
-        if !out.contains(&v) {
-            out.push(v);
-        }
-    }
-    out
 }
 
 /// A verdict's word and CSS class.

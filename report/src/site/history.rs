@@ -7,9 +7,9 @@ use std::path::Path;
 use super::chart::{SiteChart, SiteLine, SiteMarks, SitePoint};
 use super::html::{escape, num, page, slug};
 use crate::error::Error;
-use crate::history::change_points::{self, ChangePoint};
+use crate::history::change_points::ChangePoint;
 use crate::history::commits::{self, CommitEntry, Phase, Track};
-use crate::history::{self, Entry};
+use crate::history::{self, SpeedupHistory};
 
 /// The history pages as (file name, HTML), `history.html` first.
 pub fn pages(history_dir: &Path) -> Result<Vec<(String, String)>, Error> {
@@ -62,47 +62,39 @@ pub fn pages(history_dir: &Path) -> Result<Vec<(String, String)>, Error> {
     }
 
     index.push_str("<h2>Speedups per appended run</h2>\n");
-    let experiments = distinct(speedups.iter().map(|e| e.experiment.clone()));
-    if experiments.is_empty() {
+    let histories = history::speedup_histories(&speedups);
+    if histories.is_empty() {
         index.push_str(
             "<p>No speedup history (<code>harness history append</code> writes \
                         <code>results/history/history.csv</code>).</p>\n",
         );
     } else {
         index.push_str("<ul>\n");
-        for experiment in experiments {
-            let own: Vec<&Entry> = speedups.iter().filter(|e| e.experiment == experiment).collect();
-            let file = format!("speedups-{}.html", slug(&[&experiment]));
-            let (chart, runs, changes, regressions) = speedup_chart(&experiment, &own, &commits);
+        for h in &histories {
+            let file = format!("speedups-{}.html", slug(&[&h.experiment]));
+            let regressions: usize = h.tracks.iter().map(|t| t.regressions.len()).sum();
+            let changes: usize = h.tracks.iter().map(|t| t.change_points.len()).sum();
             index.push_str(&format!(
-                "<li><a href=\"{file}\">{}</a>: {} tracked speedups over {runs} runs, {regressions} regressions, \
+                "<li><a href=\"{file}\">{}</a>: {} tracked speedups over {} runs, {regressions} regressions, \
                  {changes} change points</li>\n",
-                escape(&experiment),
-                distinct(own.iter().map(|e| (e.series.clone(), e.point.clone()))).len()
+                escape(&h.experiment),
+                h.tracks.len(),
+                h.runs.len()
             ));
             let body = format!(
                 "<h1>{}: speedup history</h1>\n<p>Every tracked speedup (95% interval) of the appended runs of \
                  <code>history.csv</code>; red crosses: a drop of more than {}% beyond both intervals; rings and \
                  dashed rules: change points.</p>\n{}",
-                escape(&experiment),
+                escape(&h.experiment),
                 history::REGRESSION * 100.0,
-                chart.element("chart-0")
+                speedup_chart(h, &commits).element("chart-0")
             );
-            pages.push((file, page(&format!("{experiment}: speedup history"), &body)));
+            pages.push((file, page(&format!("{}: speedup history", h.experiment), &body)));
         }
         index.push_str("</ul>\n");
     }
     pages.insert(0, ("history.html".into(), page("History", &index)));
     Ok(pages)
-}
-
-fn distinct<T: PartialEq>(values: impl Iterator<Item = T>) -> Vec<T> {
-    values.fold(Vec::new(), |mut v, x| {
-        if !v.contains(&x) {
-            v.push(x);
-        }
-        v
-    })
 }
 
 fn short(commit: &str) -> String {
@@ -224,36 +216,28 @@ fn commits_page(commits: &[CommitEntry]) -> String {
     page("Commits", &body)
 }
 
-/// The speedup history chart of one experiment, with how many runs, change points and regressions it shows.
-fn speedup_chart(experiment: &str, own: &[&Entry], commits: &[CommitEntry]) -> (SiteChart, usize, usize, usize) {
-    let runs = distinct(own.iter().map(|e| (e.commit.clone(), e.timestamp.clone())));
-    let run_of = |e: &Entry| runs.iter().position(|r| r.0 == e.commit && r.1 == e.timestamp).unwrap_or(0) + 1;
-    let tracks = distinct(own.iter().map(|e| (e.series.clone(), e.point.clone())));
+/// The speedup history chart of one experiment.
+fn speedup_chart(h: &SpeedupHistory, commits: &[CommitEntry]) -> SiteChart {
     let (mut lines, mut regressions, mut rings, mut rules) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for (i, (series, point)) in tracks.iter().enumerate() {
-        let track: Vec<&Entry> = own.iter().copied().filter(|e| &e.series == series && &e.point == point).collect();
-        for pair in track.windows(2) {
-            if history::dropped(pair[0], pair[1]) {
-                regressions.push((run_of(pair[1]) as f64, pair[1].speedup));
-            }
-        }
-        let values: Vec<f64> = track.iter().map(|e| e.speedup).collect();
-        let found =
-            change_points::detect(&values, &change_points::DEFAULT, history::change_seed(experiment, series, point));
-        let (marks, r) = change_marks(&found, |k| (run_of(track[k]) as f64, track[k].speedup));
+    for (i, track) in h.tracks.iter().enumerate() {
+        let at = |k: usize| (track.entries[k].0 as f64, track.entries[k].1.speedup);
+        regressions.extend(track.regressions.iter().map(|&k| at(k)));
+        let (marks, r) = change_marks(&track.change_points, at);
         rings.extend(marks.points);
         rules.extend(r);
+        let label = format!("{} {}", track.series, track.point);
         let points = track
+            .entries
             .iter()
-            .map(|e| {
+            .map(|&(run, e)| {
                 let full = commits.iter().find(|c| c.commit.starts_with(&e.commit) && !e.commit.is_empty());
                 SitePoint {
-                    x: run_of(e) as f64,
+                    x: run as f64,
                     y: e.speedup,
                     lo: e.lower,
                     hi: e.upper,
                     tip: vec![
-                        format!("{series} {point}"),
+                        label.clone(),
                         format!("commit {}{}", e.commit, if e.dirty == "true" { " (dirty)" } else { "" }),
                         e.timestamp.clone(),
                         format!("speedup {}", num(e.speedup)),
@@ -263,22 +247,24 @@ fn speedup_chart(experiment: &str, own: &[&Entry], commits: &[CommitEntry]) -> (
                 }
             })
             .collect();
-        lines.push(SiteLine { label: format!("{series} {point}"), style: i, points });
+        lines.push(SiteLine { label, style: i, points });
     }
-    let (changes, dropped) = (rings.len(), regressions.len());
-    let chart = SiteChart {
-        title: format!("{experiment}: speedups over the appended runs"),
+    SiteChart {
+        title: format!("{}: speedups over the appended runs", h.experiment),
         x_label: "commit of each appended run, in order".into(),
         y_label: "speedup vs reference (×)".into(),
         log_y: true,
         lines,
-        x_ticks: runs.iter().enumerate().map(|(i, r)| ((i + 1) as f64, short(&r.0))).collect(),
+        x_ticks: h.runs.iter().enumerate().map(|(i, r)| ((i + 1) as f64, short(&r.commit))).collect(),
         marks: vec![
-            SiteMarks { label: "regression (drop > 10%)".into(), mark: "cross", points: regressions },
+            SiteMarks {
+                label: format!("regression (drop > {}%)", history::REGRESSION * 100.0),
+                mark: "cross",
+                points: regressions,
+            },
             SiteMarks { label: "change point (new level from here)".into(), mark: "ring", points: rings },
         ],
         rules,
         ..SiteChart::default()
-    };
-    (chart, runs.len(), changes, dropped)
+    }
 }
