@@ -64,8 +64,9 @@ fn pipe() -> (i32, i32) {
 }
 
 impl Browser {
-    fn start(binary: &Path) -> Browser {
-        let profile = temp_dir("profile");
+    /// Starts chromium with a profile of its own (`tag` tells apart browsers of one process).
+    fn start(binary: &Path, tag: &str) -> Browser {
+        let profile = temp_dir(&format!("profile-{tag}"));
         let (commands_in, commands_out) = pipe(); // the browser reads commands on fd 3
         let (replies_in, replies_out) = pipe(); // and writes replies and events on fd 4
         let mut command = Command::new(binary);
@@ -281,10 +282,57 @@ fn the_site_of_the_committed_results_works_in_a_browser() {
         .filter(|n| n.ends_with(".html"))
         .collect();
     pages.sort();
-    let mut browser = Browser::start(&binary);
+    // The pages are checked by two browsers at once, each taking half.
+    let slowest = std::thread::scope(|scope| {
+        let (binary, out) = (binary.as_path(), out.0.as_path());
+        let halves: Vec<_> = pages
+            .chunks(pages.len().div_ceil(2))
+            .enumerate()
+            .map(|(k, half)| scope.spawn(move || check_pages(binary, out, half, &k.to_string())))
+            .collect();
+        let slowest = halves.into_iter().map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
+        slowest.max_by(|a, b| a.0.total_cmp(&b.0)).unwrap_or_default()
+    });
+    eprintln!("{} pages, slowest load {:.0} ms ({})", pages.len(), slowest.0, slowest.1);
+
+    let mut browser = Browser::start(&binary, "index");
     let url = |page: &str| format!("file://{}", out.0.join(page).display());
+    browser.open(&url("index.html"));
+    let links = browser.eval("Array.from(document.querySelectorAll('a')).map(a => a.getAttribute('href'))");
+    for name in experiment_folders(&results) {
+        assert!(links.as_array().unwrap().contains(&json!(format!("{name}.html"))), "index links {name}: {links}");
+    }
+
+    let (series, objects, median) = known_point(&results);
+    browser.open(&url("builds.html"));
+    let selector = format!("figure[data-source=\"chart-0\"] circle.pt[data-series=\"{series}\"][data-x=\"{objects}\"]");
+    let centre = browser.eval(&format!(
+        "(() => {{ const p = document.querySelector('{selector}'); p.scrollIntoView({{block: 'center'}});
+            const r = p.getBoundingClientRect(); return [r.x + r.width / 2, r.y + r.height / 2]; }})()"
+    ));
+    let (x, y) = (centre[0].as_f64().unwrap(), centre[1].as_f64().unwrap());
+    browser.call("Input.dispatchMouseEvent", json!({ "type": "mouseMoved", "x": x, "y": y }));
+    let tip = browser
+        .eval("(() => { const t = document.getElementById('tooltip'); return t.hidden ? '' : t.textContent; })()");
+    let tip = tip.as_str().unwrap();
+    let shown: f64 = tip
+        .lines()
+        .find_map(|l| l.strip_prefix("median "))
+        .unwrap_or_else(|| panic!("no median in the tooltip {tip:?}"))
+        .parse()
+        .unwrap();
+    assert!(tip.starts_with(&series), "{tip}");
+    assert!((shown - median).abs() <= 5e-4 * median.abs(), "tooltip median {shown}, summary.csv {median}");
+    eprintln!("hover over {series} at {objects} objects: median {shown} (summary.csv {median})");
+}
+
+/// Opens each of `pages` (in `out`) in a browser of its own and checks it: no console errors, no chart title or
+/// legend over the plot, a screenshot that is not blank. Returns the slowest load in ms and its page.
+fn check_pages(binary: &Path, out: &Path, pages: &[String], tag: &str) -> (f64, String) {
+    let mut browser = Browser::start(binary, tag);
+    let url = |page: &str| format!("file://{}", out.join(page).display());
     let mut slowest = (0.0, String::new());
-    for page in &pages {
+    for page in pages {
         browser.open(&url(page));
         let errors = browser.errors();
         assert!(errors.is_empty(), "{page}: {errors:?}");
@@ -313,33 +361,5 @@ fn the_site_of_the_committed_results_works_in_a_browser() {
         let colours = browser.screenshot_colours();
         assert!(colours >= 16, "{page}: screenshot has {colours} colours (blank?)");
     }
-    eprintln!("{} pages, slowest load {:.0} ms ({})", pages.len(), slowest.0, slowest.1);
-
-    browser.open(&url("index.html"));
-    let links = browser.eval("Array.from(document.querySelectorAll('a')).map(a => a.getAttribute('href'))");
-    for name in experiment_folders(&results) {
-        assert!(links.as_array().unwrap().contains(&json!(format!("{name}.html"))), "index links {name}: {links}");
-    }
-
-    let (series, objects, median) = known_point(&results);
-    browser.open(&url("builds.html"));
-    let selector = format!("figure[data-source=\"chart-0\"] circle.pt[data-series=\"{series}\"][data-x=\"{objects}\"]");
-    let centre = browser.eval(&format!(
-        "(() => {{ const p = document.querySelector('{selector}'); p.scrollIntoView({{block: 'center'}});
-            const r = p.getBoundingClientRect(); return [r.x + r.width / 2, r.y + r.height / 2]; }})()"
-    ));
-    let (x, y) = (centre[0].as_f64().unwrap(), centre[1].as_f64().unwrap());
-    browser.call("Input.dispatchMouseEvent", json!({ "type": "mouseMoved", "x": x, "y": y }));
-    let tip = browser
-        .eval("(() => { const t = document.getElementById('tooltip'); return t.hidden ? '' : t.textContent; })()");
-    let tip = tip.as_str().unwrap();
-    let shown: f64 = tip
-        .lines()
-        .find_map(|l| l.strip_prefix("median "))
-        .unwrap_or_else(|| panic!("no median in the tooltip {tip:?}"))
-        .parse()
-        .unwrap();
-    assert!(tip.starts_with(&series), "{tip}");
-    assert!((shown - median).abs() <= 5e-4 * median.abs(), "tooltip median {shown}, summary.csv {median}");
-    eprintln!("hover over {series} at {objects} objects: median {shown} (summary.csv {median})");
+    slowest
 }

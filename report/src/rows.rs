@@ -18,7 +18,7 @@ pub static SETTINGS: std::sync::LazyLock<Vec<&'static str>> = std::sync::LazyLoc
 pub static POINT: std::sync::LazyLock<Vec<&'static str>> = std::sync::LazyLock::new(schema::row::point_names);
 
 /// Index of each column in `schema::row::COLUMNS`.
-fn index_of(column: &str) -> Option<usize> {
+pub(crate) fn index_of(column: &str) -> Option<usize> {
     static INDEX: OnceLock<HashMap<&'static str, usize>> = OnceLock::new();
     INDEX.get_or_init(|| COLUMNS.iter().enumerate().map(|(i, c)| (c.name, i)).collect()).get(column).copied()
 }
@@ -58,6 +58,11 @@ impl Run {
     /// A column's value as text (`""` for a column the schema does not declare).
     pub fn text(&self, column: &str) -> &str {
         index_of(column).map_or("", |i| self.text[i].as_str())
+    }
+
+    /// The text of the column at `index` of `schema::row::COLUMNS` (see [`index_of`]): no lookup by name.
+    pub(crate) fn text_at(&self, index: usize) -> &str {
+        &self.text[index]
     }
 
     /// A numeric column's value (NaN when not numeric or not declared).

@@ -480,18 +480,30 @@ fn instruction_counts_gate_above_the_threshold_from_one_compiler() {
 #[test]
 fn same_distribution_is_rarely_flagged() {
     let trials = 100;
-    let mut flagged = 0;
-    let mut significant = 0;
-    for t in 0..trials {
-        let old = Gen { noise_seed: 1000 + 2 * t, ..Gen::default() };
-        let new = Gen { noise_seed: 1001 + 2 * t, ..Gen::default() };
-        let outcome = compare(&format!("null-{t}"), &new, &old, &CheckOptions::default()).unwrap();
-        assert!(outcome.counter_changes.is_empty() && outcome.missing.is_empty());
-        assert_eq!(outcome.speedups.len(), 4);
-        assert_eq!(outcome.times.len(), 24);
-        flagged += outcome.failed() as usize;
-        significant += outcome.times.iter().any(|t| t.first.ratio.hi < 1.0 || t.first.ratio.lo > 1.0) as usize;
-    }
+    // The trials are independent: one thread per core takes every n-th.
+    let workers = std::thread::available_parallelism().map_or(1, |n| n.get()) as u64;
+    let (flagged, significant) = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..workers)
+            .map(|w| {
+                scope.spawn(move || {
+                    let (mut flagged, mut significant) = (0, 0);
+                    for t in (w..trials).step_by(workers as usize) {
+                        let old = Gen { noise_seed: 1000 + 2 * t, ..Gen::default() };
+                        let new = Gen { noise_seed: 1001 + 2 * t, ..Gen::default() };
+                        let outcome = compare(&format!("null-{t}"), &new, &old, &CheckOptions::default()).unwrap();
+                        assert!(outcome.counter_changes.is_empty() && outcome.missing.is_empty());
+                        assert_eq!(outcome.speedups.len(), 4);
+                        assert_eq!(outcome.times.len(), 24);
+                        flagged += outcome.failed() as usize;
+                        significant +=
+                            outcome.times.iter().any(|t| t.first.ratio.hi < 1.0 || t.first.ratio.lo > 1.0) as usize;
+                    }
+                    (flagged, significant)
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
+    });
     println!("false alarms: {flagged} of {trials} trials flagged; {significant} trials had some interval excluding 1");
     assert!(flagged <= 5, "{flagged} of {trials} same-distribution trials flagged");
 }

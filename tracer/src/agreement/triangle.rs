@@ -123,6 +123,9 @@ mod tests {
             kept.into_iter().filter(|&i| triangles[i as usize].exact(ray).outcomes.may_hit()).collect()
         };
         let (mut total, mut screened, mut excepted) = (0, 0, 0);
+        // Every fourth ray (all three kinds of aim and origin scale, as 4 and 3 are coprime): keeping every
+        // triangle costs an f64 test of every triangle per ray.
+        let rays: Vec<Ray> = rays.into_iter().step_by(4).collect();
         for ray in &rays {
             let (skipped, all) = (candidates(ray, true), candidates(ray, false));
             for &i in all.iter().filter(|i| !skipped.contains(i)) {

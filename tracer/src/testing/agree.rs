@@ -2,11 +2,12 @@
 //! the one definition ([`crate::agreement::check`]).
 
 use crate::accel::wide::WidePrimitive;
-use crate::accel::{AccelVisitor, Accelerator, BuiltAccel, Hit, List};
+use crate::accel::{AccelKind, AccelParams, AccelVisitor, Accelerator, BuiltAccel, BvhParams, Hit, List};
 use crate::agreement::{Answer, BruteForce64, ExactPrimitive, Outcome, RayCandidates, Strictness, check, t_tolerance};
 use crate::counters::NoCounters;
 use crate::geometry::{Primitive, Ray, Sphere, Triangle, TrianglePrimitive};
 use crate::render::PrimaryHits;
+use rayon::prelude::*;
 
 use super::every_tree;
 
@@ -207,10 +208,25 @@ fn assert_every_tree_agrees_over<P: WidePrimitive, X: ExactPrimitive>(
     reference: &Reference<'_, X>,
     strictness: Strictness,
 ) {
-    for params in every_tree() {
-        let accel = BuiltAccel::build(prims, &params);
-        reference.assert_built_agrees(&format!("{label} {params:?}"), &accel, strictness);
-    }
+    // `every_tree` varies the traversal innermost: a binary tree is built once and traversed in each order. The
+    // trees are checked on rayon's threads.
+    let same_tree = |a: &AccelParams, b: &AccelParams| {
+        matches!(a.kind, AccelKind::Bvh | AccelKind::FlatBvh)
+            && AccelParams { bvh: BvhParams { traversal: b.bvh.traversal, ..a.bvh }, ..*a } == *b
+    };
+    let trees = every_tree();
+    let groups: Vec<&[AccelParams]> = trees.chunk_by(same_tree).collect();
+    groups.into_par_iter().for_each(|group| {
+        let mut accel = BuiltAccel::build(prims, &group[0]);
+        for (k, params) in group.iter().enumerate() {
+            accel = match accel {
+                BuiltAccel::Bvh(tree) if k > 0 => BuiltAccel::Bvh(tree.with_traversal(params.bvh.traversal)),
+                BuiltAccel::FlatBvh(tree) if k > 0 => BuiltAccel::FlatBvh(tree.with_traversal(params.bvh.traversal)),
+                accel => accel,
+            };
+            reference.assert_built_agrees(&format!("{label} {params:?}"), &accel, strictness);
+        }
+    });
 }
 
 #[cfg(test)]

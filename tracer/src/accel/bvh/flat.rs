@@ -28,6 +28,12 @@ impl<P: Referenced> FlatBvh<P> {
         Self { nodes: built.nodes, prims: built.ordered, prim_ids: built.prim_order, params: *params }
     }
 
+    /// The same tree traversed in `traversal` order (the order does not change the tree: nothing is rebuilt).
+    pub fn with_traversal(mut self, traversal: Traversal) -> Self {
+        self.params.traversal = traversal;
+        self
+    }
+
     /// The parameters it was built with.
     pub fn params(&self) -> &BvhParams {
         &self.params

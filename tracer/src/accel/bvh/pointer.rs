@@ -67,6 +67,12 @@ impl<P: Referenced> Bvh<P> {
         Self { root: boxed(&built, 0), prims: prims.to_vec(), params: *params }
     }
 
+    /// The same tree traversed in `traversal` order (the order does not change the tree: nothing is rebuilt).
+    pub fn with_traversal(mut self, traversal: Traversal) -> Self {
+        self.params.traversal = traversal;
+        self
+    }
+
     /// The parameters it was built with.
     pub fn params(&self) -> &BvhParams {
         &self.params

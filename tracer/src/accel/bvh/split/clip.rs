@@ -57,15 +57,15 @@ impl Polygon {
     }
 
     /// Bounds rounded outward to f32 (one ulp beyond the nearest f32, covering the f64 rounding); empty if no vertex.
+    /// Rounding to the nearest f32 and stepping one ulp are monotonic, so they are applied once, to the f64 bounds:
+    /// the same box as rounding every vertex.
     fn bounds(&self) -> Box3A {
-        let mut b = Box3A::EMPTY;
-        for v in &self.vertices[..self.len] {
-            let near = v.as_vec3a();
-            let lo = Vec3A::from_array(near.to_array().map(f32::next_down));
-            let hi = Vec3A::from_array(near.to_array().map(f32::next_up));
-            b.add(&Box3A { min: lo, max: hi });
+        let Some((first, rest)) = self.vertices[..self.len].split_first() else { return Box3A::EMPTY };
+        let (lo, hi) = rest.iter().fold((*first, *first), |(lo, hi), v| (lo.min(*v), hi.max(*v)));
+        Box3A {
+            min: Vec3A::from_array(lo.as_vec3a().to_array().map(f32::next_down)),
+            max: Vec3A::from_array(hi.as_vec3a().to_array().map(f32::next_up)),
         }
-        b
     }
 }
 
