@@ -39,7 +39,7 @@ fn main() {
 /// The tinybvh shim: `src/peers/tinybvh/shim.cpp` over the `tiny_bvh.h` that the `tinybvh-rs` package bundles,
 /// compiled once per x86-64 ISA level into `libbvhlab_tinybvh.a` (see `src/peers/tinybvh/mod.rs`).
 ///
-/// - The header is found through `cargo metadata` (the `tinybvh-rs` package's folder; no fixed cargo paths).
+/// - The header is found through the lock file and cargo's own source folders ([`header_dir`]).
 /// - Each variant `vN` is compiled with `-march=x86-64-vN -DTB_VARIANT=vN` (its symbols `tinybvh_vN_*`), then
 ///   partially linked with its section groups resolved (`ld -r --force-group-allocation`) and every symbol but
 ///   `tinybvh_vN_*` made local (`objcopy`), so no inline function or template instance of one variant (the
@@ -183,57 +183,59 @@ mod tinybvh {
             .collect()
     }
 
-    /// The folder of `tiny_bvh.h` in the `tinybvh-rs` package that cargo resolved for this workspace. Only the
-    /// target's packages are asked for (`--filter-platform`): offline, cargo has downloaded no others (a fresh
-    /// registry lacks e.g. the Windows-only ones the lock file lists).
+    /// The folder of `tiny_bvh.h` in the `tinybvh-rs` package that cargo unpacked for this build: its version from
+    /// the workspace's `Cargo.lock`, its folder under cargo's own sources (`$CARGO_HOME/registry/src/*/NAME-VERSION`).
+    /// Cargo has downloaded and unpacked every dependency of this package before its build script runs, so this
+    /// holds on a fresh registry and on a full one alike, offline too; no other package, and no network, is asked
+    /// for. (`cargo metadata`, used before, resolves the whole workspace with its dev-dependencies, which a fresh
+    /// registry lacks when only the harness was built.)
     fn header_dir(manifest_dir: &Path) -> PathBuf {
-        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-        let target = std::env::var("TARGET").expect("cargo sets TARGET for build scripts");
-        let output = Command::new(cargo)
-            .args(["metadata", "--format-version", "1", "--offline", "--filter-platform", &target, "--manifest-path"])
-            .arg(manifest_dir.join("Cargo.toml"))
-            .output()
-            .expect("run cargo metadata");
-        let json = String::from_utf8_lossy(&output.stdout);
-        assert!(output.status.success(), "cargo metadata failed: {}", String::from_utf8_lossy(&output.stderr));
-        // Every package's `manifest_path`; the one of a `tinybvh-rs` package bundling the header is ours.
-        let found: Vec<PathBuf> = json
-            .split("\"manifest_path\":\"")
-            .skip(1)
-            .filter_map(json_string)
-            .map(|m| PathBuf::from(m).with_file_name("ffi/tinybvh"))
+        let lock_path = manifest_dir.join("../Cargo.lock");
+        let lock = String::from_utf8_lossy(&read(&lock_path)).into_owned();
+        let versions = locked_versions(&lock, PACKAGE);
+        let [version] = &versions[..] else {
+            panic!("{}: expected one {PACKAGE} package, found versions {versions:?}", lock_path.display())
+        };
+        let home = std::env::var_os("CARGO_HOME").map(PathBuf::from).unwrap_or_else(|| {
+            PathBuf::from(std::env::var_os("HOME").expect("HOME or CARGO_HOME is set")).join(".cargo")
+        });
+        let sources = home.join("registry/src");
+        let mut found: Vec<PathBuf> = std::fs::read_dir(&sources)
+            .into_iter()
+            .flatten()
+            .filter_map(|e| e.ok())
+            .map(|index| index.path().join(format!("{PACKAGE}-{version}")))
             .filter(|dir| {
-                let manifest = dir.join("../../Cargo.toml");
-                dir.join("tiny_bvh.h").is_file()
-                    && std::fs::read_to_string(manifest).is_ok_and(|t| t.contains(&format!("name = \"{PACKAGE}\"")))
+                let manifest = std::fs::read_to_string(dir.join("Cargo.toml")).unwrap_or_default();
+                dir.join("ffi/tinybvh/tiny_bvh.h").is_file()
+                    && manifest.contains(&format!("name = \"{PACKAGE}\""))
+                    && manifest.contains(&format!("version = \"{version}\""))
             })
             .collect();
-        match &found[..] {
-            [dir] => dir.clone(),
-            _ => {
-                panic!("expected one {PACKAGE} package with ffi/tinybvh/tiny_bvh.h in cargo metadata, found {found:?}")
+        // One index folder per registry protocol may hold the same checksummed package: any of them will do.
+        found.sort();
+        match found.first() {
+            Some(dir) => {
+                println!("cargo:rerun-if-env-changed=CARGO_HOME");
+                dir.join("ffi/tinybvh")
             }
+            None => panic!(
+                "{PACKAGE} {version} (Cargo.lock) is not unpacked under {}/*/{PACKAGE}-{version}: \
+                 run `cargo fetch`, or set CARGO_HOME to the cargo home this build uses",
+                sources.display()
+            ),
         }
     }
 
-    /// The JSON string at the start of `s` (after its opening quote), unescaped; `None` if it is not closed.
-    fn json_string(s: &str) -> Option<String> {
-        let mut out = String::new();
-        let mut chars = s.chars();
-        loop {
-            match chars.next()? {
-                '"' => return Some(out),
-                '\\' => match chars.next()? {
-                    'u' => out.push(char::from_u32(
-                        u32::from_str_radix(&chars.by_ref().take(4).collect::<String>(), 16).ok()?,
-                    )?),
-                    'n' => out.push('\n'),
-                    't' => out.push('\t'),
-                    c => out.push(c),
-                },
-                c => out.push(c),
-            }
-        }
+    /// The versions of package `name` in the lock file `lock`.
+    fn locked_versions(lock: &str, name: &str) -> Vec<String> {
+        lock.split("[[package]]")
+            .filter(|entry| entry.lines().any(|l| l.trim() == format!("name = \"{name}\"")))
+            .filter_map(|entry| {
+                let line = entry.lines().find(|l| l.trim_start().starts_with("version = "))?;
+                Some(line.trim().trim_start_matches("version = ").trim_matches('"').to_string())
+            })
+            .collect()
     }
 
     fn read(path: &Path) -> Vec<u8> {

@@ -150,6 +150,12 @@ fn bad_configs_exit_2_with_one_line_and_write_nothing() {
             "-bad/absent.obj: no such mesh file (allowed: a data set name or an .obj/.ply path)",
         ),
         (
+            // Refused at load for every backend alike (tinybvh used to stop mid-sweep on it).
+            "mesh with a non-finite vertex",
+            "name = \"t\"\n[sweep]\nscene = \"mesh\"\nmesh = \"nan.obj\"\naccel = [\"flat-bvh\", \"tinybvh\"]\n",
+            "-bad/nan.obj: vertex 1 is not finite (NaN, 0, 0) (allowed: finite x, y, z)",
+        ),
+        (
             "mesh scene without a mesh",
             "name = \"t\"\n[sweep]\nscene = \"mesh\"\nworkload = \"primary\"\n",
             "mesh: missing (scene \"mesh\" needs a data set name or an .obj/.ply path)",
@@ -171,6 +177,7 @@ fn bad_configs_exit_2_with_one_line_and_write_nothing() {
         ),
     ];
     std::fs::write(dir.join("bad.csv"), "0,0,0,-1\n").unwrap();
+    std::fs::write(dir.join("nan.obj"), "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
     for (what, text, expected) in cases {
         let cfg = dir.join("bad.toml");
         std::fs::write(&cfg, text).unwrap();

@@ -8,8 +8,9 @@
 //! - [`rays`] holds fixed ray sets (primary, shadow, diffuse) traced identically by every backend;
 //! - [`agreement`] is the one definition of an answer agreeing with brute force (tolerance, f64 arbitration).
 //!
-//! With the `testing` feature (and in this crate's own tests), `testing` holds the agreement check against
-//! brute force, the ray mixes and the test scenes that every backend's tests share.
+//! [`testing`] holds the agreement check against brute force, the ray mixes and the test scenes that every
+//! backend's tests share (always compiled: a feature for it changed the whole chain's feature set between the
+//! release build and the test build, so the test command compiled every crate above the tracer again).
 //!
 //! The crate does no file or terminal I/O; [`render::Image::write_png`] encodes into any writer.
 
@@ -23,7 +24,6 @@ pub mod rays;
 pub mod render;
 pub mod rng;
 pub mod scene;
-#[cfg(any(test, feature = "testing"))]
 pub mod testing;
 
 pub use glam::Vec3;

@@ -88,8 +88,19 @@ pub fn load_source(source: &str) -> Result<Arc<Mesh>, Error> {
     Ok(mesh)
 }
 
-/// `mesh` if every index is a vertex of it, else one line naming `path` and the first bad triangle.
+/// `mesh` if every position is finite and every index is a vertex of it, else one line naming `path` and the first
+/// bad vertex or triangle. Every backend, ours and the peers alike, gets only meshes checked here.
 fn checked(mesh: Mesh, path: &Path) -> Result<Mesh, Error> {
+    if let Some(k) = mesh.positions.iter().position(|p| !p.is_finite()) {
+        let p = mesh.positions[k];
+        return Err(Error::Input(format!(
+            "{}: vertex {k} is not finite ({}, {}, {}) (allowed: finite x, y, z)",
+            path.display(),
+            p.x,
+            p.y,
+            p.z
+        )));
+    }
     let n = mesh.positions.len();
     match mesh.indices.iter().position(|t| t.iter().any(|&i| i as usize >= n)) {
         None => Ok(mesh),

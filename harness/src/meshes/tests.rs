@@ -104,6 +104,8 @@ fn loader_errors_are_one_line_naming_the_file() {
         ),
         ("garbage.ply", b"hello".to_vec(), "not a readable PLY"),
         ("range.obj", b"v 0 0 0\nf 1 2 3\n".to_vec(), "range.obj"),
+        ("nan.obj", b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n".to_vec(), "vertex 1 is not finite (NaN, 0, 0)"),
+        ("inf.obj", b"v 0 0 0\nv 0 -inf 0\nv 0 1 0\nf 1 2 3\n".to_vec(), "vertex 1 is not finite (0, -inf, 0)"),
         ("mesh.stl", b"solid".to_vec(), "allowed: an .obj or .ply"),
     ];
     for (name, bytes, says) in cases {

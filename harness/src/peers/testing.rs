@@ -1,6 +1,6 @@
 //! Test helpers for the peers: the Embree device, and brute force over a triangle mesh. The test scenes and
 //! meshes, ray mixes and agreement check against brute force are the tracer's own, shared with its tests:
-//! `tracer::testing` (the `testing` feature).
+//! `tracer::testing`.
 
 use std::io::Write;
 

@@ -25,6 +25,7 @@ pub struct Reference<'a, X: ExactPrimitive = Sphere> {
 
 impl<'a> Reference<'a, Sphere> {
     /// Traces `rays` through a [`List`] of `spheres`.
+    #[inline]
     pub fn new(spheres: &'a [Sphere], rays: &'a [Ray]) -> Self {
         Self::of(spheres, spheres, rays)
     }
@@ -50,6 +51,7 @@ impl<'a, X: ExactPrimitive> Reference<'a, X> {
     }
 
     /// Starts comparing answers to these rays; `what` names the backend in the failure message.
+    #[inline]
     pub fn compare(&self, what: &str, strictness: Strictness) -> Comparison<'_, 'a, X> {
         Comparison {
             reference: self,
@@ -125,16 +127,19 @@ pub struct Comparison<'r, 'a, X: ExactPrimitive = Sphere> {
 
 impl<X: ExactPrimitive> Comparison<'_, '_, X> {
     /// Compares `got` with brute force's closest hit of ray `i`.
+    #[inline]
     pub fn closest(&mut self, i: usize, got: Option<Hit>) {
         self.check(i, Answer::Closest(got));
     }
 
     /// Compares `got` with brute force's occlusion of ray `i`.
+    #[inline]
     pub fn occluded(&mut self, i: usize, got: bool) {
         self.check(i, Answer::Occluded(got));
     }
 
     /// Compares `got` with brute force's answer of the same kind to ray `i`.
+    #[inline]
     pub fn check(&mut self, i: usize, got: Answer) {
         let (reference, ray) = (self.reference, &self.reference.rays[i]);
         self.answers += 1;
@@ -158,6 +163,7 @@ impl<X: ExactPrimitive> Comparison<'_, '_, X> {
 
     /// Prints the excused disagreements and panics with the others (the first 8 shown), if any.
     #[track_caller]
+    #[inline]
     pub fn finish(self) -> Tally {
         let Self { what, strictness, bad, excused, reference, answers } = self;
         let tally = Tally { answers, tolerated: excused.len() };
@@ -182,6 +188,9 @@ impl<X: ExactPrimitive> Comparison<'_, '_, X> {
 /// Builds every tree configuration ([`every_tree`]) over `spheres` and checks each against brute force on
 /// `rays` with [`Strictness::Identical`] (their leaves call [`Sphere::intersect`]); `label` starts the failure
 /// message, followed by the configuration.
+// `#[inline]`: compiled only where a test calls it, not into every build of the tracer (it builds and traverses
+// every tree configuration).
+#[inline]
 #[track_caller]
 pub fn assert_every_tree_agrees(label: &str, spheres: &[Sphere], rays: &[Ray]) {
     assert_every_tree_agrees_over(label, spheres, &Reference::new(spheres, rays), Strictness::Identical);

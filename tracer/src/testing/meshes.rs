@@ -22,6 +22,7 @@ pub struct TestMesh {
 
 /// The procedural test meshes: random spheres tessellated coarsely and finely (closed meshes: shared edges and
 /// vertices), random triangles (3000, seed 5), one triangle and an empty mesh, each with its rays.
+#[inline]
 pub fn test_meshes() -> Vec<TestMesh> {
     let tessellated = |n: usize, segments: u32, seed: u64| {
         let spheres = SceneKind::RandomSpheres.generate(n, seed).spheres;
@@ -61,6 +62,7 @@ pub fn test_meshes() -> Vec<TestMesh> {
 ///    in a random direction.
 ///
 /// With no triangles every ray is a random line around the origin.
+#[inline]
 pub fn mesh_ray_mix(mesh: &Mesh, seed: u64, count: usize) -> Vec<Ray> {
     let mut rng = SplitMix64::new(seed);
     let bounds = if mesh.positions.is_empty() { Aabb { min: -Vec3::ONE, max: Vec3::ONE } } else { mesh.bounds() };

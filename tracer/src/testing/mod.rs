@@ -1,4 +1,4 @@
-//! Test support shared by the tracer's tests and the harness's peer tests (feature `testing`).
+//! Test support shared by the tracer's tests and the harness's peer tests.
 //!
 //! Every backend's tests check it against brute force with the one definition of agreement
 //! ([`crate::agreement`]), on shared configurations and rays:
@@ -10,8 +10,8 @@
 //! - [`Reference`]: brute force's answers to a ray set, compared with an accelerator's under a
 //!   [`crate::agreement::Strictness`]; [`assert_every_tree_agrees`] checks every tree configuration at once.
 //!
-//! Enabled for this crate's own tests and, in other crates' tests, by the `testing` feature
-//! (`tracer = { workspace = true, features = ["testing"] }` under `[dev-dependencies]`).
+//! Always compiled, at no cost to a release build: every function here is generic or `#[inline]`, so it is compiled
+//! only into the tests that call it.
 
 mod agree;
 mod meshes;
@@ -28,6 +28,7 @@ use crate::scene::SceneKind;
 
 /// Every tree configuration: both binary layouts × every split × leaf sizes `1..=16` × both traversal orders (16
 /// SAH bins), then [`every_wide`].
+#[inline]
 pub fn every_tree() -> Vec<AccelParams> {
     let mut all = Vec::new();
     for kind in [AccelKind::Bvh, AccelKind::FlatBvh] {
@@ -48,6 +49,7 @@ pub fn every_tree() -> Vec<AccelParams> {
 /// AVX-512) × width × leaf block × child order. The binary tree each is collapsed from cycles through every split ×
 /// leaf sizes 1, 16, 4 and 8 (so leaves of one block, of several blocks and merged subtrees all occur), and the
 /// batch packet size through 1, 8, 16 and 64 (so every kernel, width and block runs in packets of every size).
+#[inline]
 pub fn every_wide() -> Vec<AccelParams> {
     let mut all = Vec::new();
     let mut binary = Split::ALL.into_iter().flat_map(|split| [1, 16, 4, 8].map(|leaf_size| (split, leaf_size))).cycle();
@@ -80,6 +82,7 @@ pub struct TestScene {
 }
 
 /// Every test scene: both scene kinds × 0, 1, 50 and 2000 spheres × seeds 1 and 2 (16 scenes), in that order.
+#[inline]
 pub fn scenes() -> Vec<TestScene> {
     let mut all = Vec::new();
     for kind in SceneKind::ALL {

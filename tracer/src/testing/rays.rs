@@ -22,6 +22,7 @@ use crate::scene::{PointLight, Scene};
 /// 6. non-unit directions: aimed at a sphere's center, 0.1 to 3 times the distance long.
 ///
 /// With no spheres every ray is a random line.
+#[inline]
 pub fn sphere_ray_mix(spheres: &[Sphere], seed: u64, count: usize) -> Vec<Ray> {
     let mut draw = Families::new(spheres, seed, Vec3::ZERO, 0.5);
     (0..count)
@@ -46,6 +47,7 @@ pub fn sphere_ray_mix(spheres: &[Sphere], seed: u64, count: usize) -> Vec<Ray> {
 ///   tangent where a sphere touches its box, a non-unit direction at a sphere's center);
 /// - from every camera ray's brute-force hit, offset along the normal like the shader does: a shadow segment
 ///   to each light and a bounce in a random direction around the normal.
+#[inline]
 pub fn scene_ray_mix(scene: &Scene, seed: u64) -> Vec<Ray> {
     let spheres = &scene.spheres;
     let mut draw = Families::new(spheres, seed, scene.camera.position, 0.25);
@@ -78,6 +80,7 @@ pub fn scene_ray_mix(scene: &Scene, seed: u64) -> Vec<Ray> {
 /// From every primary ray's hit (`hit_normal`: its `t` and the surface normal there, either side), offset along
 /// the normal like the shader does: a shadow segment to each light and a bounce around the normal (`unit` draws
 /// the random unit vector added to it).
+#[inline]
 pub fn secondary_rays(
     primaries: &[Ray],
     lights: &[PointLight],

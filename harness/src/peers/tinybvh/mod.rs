@@ -3,7 +3,7 @@
 //!
 //! **Why a shim.** The crates.io wrapper `tinybvh-rs` 0.1.0-beta.3 declares a 64-byte `Ray` where the header it
 //! bundles has a 128-byte one (unsound: it segfaults), has no occlusion query and compiles with `-march=native`.
-//! We keep its bundled header (`ffi/tinybvh/tiny_bvh.h`, found by `build.rs` through `cargo metadata`) and call
+//! We keep its bundled header (`ffi/tinybvh/tiny_bvh.h`, found by `build.rs` through the lock file and cargo's unpacked sources) and call
 //! it only through `shim.cpp`: rays and hits cross as the shim's own plain structs ([`TbRay`], [`TbHit`],
 //! [`TbStats`]), their sizes asserted in C++ (`static_assert`) and here (`const` asserts), and checked against
 //! each other at run time by the tests ([`TbAbi`]); tinybvh's `Ray` never leaves C++.
