@@ -11,7 +11,9 @@ use schema::columns::Replaced;
 use schema::{Axis, Named, Raw, SceneName, Settings, Workload};
 use tracer::scene::{Scene, sphere_file};
 
-use crate::backend::workload::{Output, Work};
+use tracer::job::Output;
+
+use crate::backend::workload::bvhlab_phase_trace;
 use crate::backend::{self, Setup};
 use crate::cli::RenderArgs;
 use crate::error::Error;
@@ -100,9 +102,9 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
     let t1 = Instant::now();
     let built = setup.install(|| backend.build(&settings, &scene.geometry(), &setup))?;
     let build_s = t1.elapsed().as_secs_f64();
-    let shaded = Some(scene.shaded(&triangles));
+    let (job, strategy) = (scene.render(&settings, &triangles), settings.strategy());
     let t2 = Instant::now();
-    let output = setup.install(|| built.structure.run(Work::new(shaded, &settings, None)));
+    let output = setup.install(|| bvhlab_phase_trace(|| built.structure.run(&job, &strategy)));
     let render_s = t2.elapsed().as_secs_f64();
     let Output::Image(image) = output else { unreachable!("the render workload draws an image") };
 
@@ -133,7 +135,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
     );
     say!("time         scene {scene_s:.4} s, build {build_s:.4} s, render {render_s:.4} s, encode {encode_s:.4} s");
     if args.count {
-        let (_, c) = setup.install(|| built.structure.run_counted(Work::new(shaded, &settings, None)));
+        let (_, c) = setup.install(|| bvhlab_phase_trace(|| built.structure.run_counted(&job, &strategy)));
         let (nodes, boxes, prims) = c.per_ray();
         let prim = if triangles.is_empty() { "sphere" } else { "triangle" };
         say!("rays         {} ({:.2} Mrays/s)", c.rays, c.rays as f64 / render_s / 1e6);

@@ -20,10 +20,12 @@ pub mod counters;
 pub mod executor;
 pub mod fingerprint;
 pub mod geometry;
+pub mod job;
 pub mod rays;
 pub mod render;
 pub mod rng;
 pub mod scene;
+pub mod structure;
 pub mod testing;
 
 pub use glam::Vec3;

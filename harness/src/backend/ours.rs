@@ -1,10 +1,10 @@
 //! The tracer's own structures: the brute-force list, the pointer BVH, the flat BVH and the wide BVH.
 
 use schema::{Accel, Settings};
+use tracer::accel::WideParams;
 use tracer::accel::wide::Kernel;
-use tracer::accel::wide::WidePrimitive;
-use tracer::accel::{AccelParams, BuiltAccel, WideParams};
 use tracer::geometry::{MollerTrumboreTriangle, TrianglePrimitive, TriangleTest, WatertightTriangle};
+use tracer::structure::{self, Primitives};
 
 use super::{Backend, Built, Geometry, Setup, Unavailable};
 use crate::error::Error;
@@ -46,22 +46,23 @@ impl Backend for Ours {
     }
 
     /// Chooses the primitive once: spheres, or the mesh's triangles with `triangle_test`; everything after is
-    /// compiled for it.
+    /// compiled for it (in the tracer: [`tracer::structure`]).
     fn build(&self, settings: &Settings, geometry: &Geometry<'_>, setup: &Setup) -> Result<Built, Error> {
         let params = settings.accel_params();
-        Ok(match *geometry {
-            Geometry::Spheres(spheres) => built(setup, spheres, &params),
+        let structure = match *geometry {
+            Geometry::Spheres(spheres) => setup.install(|| structure::build(Primitives::Spheres(spheres), &params)),
             Geometry::Triangles(mesh) => match settings.triangle_test.unwrap_or(TriangleTest::Watertight) {
-                TriangleTest::MollerTrumbore => built(setup, &MollerTrumboreTriangle::all(mesh.triangles()), &params),
-                TriangleTest::Watertight => built(setup, &WatertightTriangle::all(mesh.triangles()), &params),
+                TriangleTest::MollerTrumbore => {
+                    let prims = MollerTrumboreTriangle::all(mesh.triangles());
+                    setup.install(|| structure::build(Primitives::MollerTrumbore(&prims), &params))
+                }
+                TriangleTest::Watertight => {
+                    let prims = WatertightTriangle::all(mesh.triangles());
+                    setup.install(|| structure::build(Primitives::Watertight(&prims), &params))
+                }
             },
-        })
+        };
+        let simd_kernel = structure.simd_kernel().unwrap_or("-");
+        Ok(Built { structure, peer_info: "-".into(), simd_kernel })
     }
-}
-
-/// The structure of `params` over `prims`, built in the setup's pool.
-fn built<P: WidePrimitive>(setup: &Setup, prims: &[P], params: &AccelParams) -> Built {
-    let accel = setup.install(|| BuiltAccel::build(prims, params));
-    let simd_kernel = accel.kernel_name().unwrap_or("-");
-    Built { structure: Box::new(accel), peer_info: "-".into(), simd_kernel }
 }

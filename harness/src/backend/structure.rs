@@ -1,25 +1,13 @@
-//! A built backend as the harness traces it: one dynamic call per workload, around a loop monomorphized for the
-//! concrete structure and counters (the hot loop has no dynamic dispatch).
+//! A built backend as the harness times it: a [`Structure`] that runs one job per dynamic call, around loops
+//! monomorphized for the concrete structure and counters (the hot loop has no dynamic dispatch). The tracer's own
+//! structures come compiled from the tracer ([`tracer::structure`]); a peer's are compiled here, by [`Concrete`].
 
-use tracer::accel::wide::WidePrimitive;
-use tracer::accel::{AccelVisitor, Accelerator, BuiltAccel, TreeStats};
+use tracer::accel::{Accelerator, TreeStats};
 use tracer::counters::{NoCounters, WorkCounters};
 use tracer::executor::Strategy;
-use tracer::rays::{RayAnswers, RaySet, trace};
-
-use super::workload::{Output, Work};
-
-/// A built structure of any backend.
-pub trait Structure: Send + Sync {
-    /// Runs the workload uncounted (the timed pass).
-    fn run(&self, work: Work<'_, NoCounters>) -> Output;
-    /// Runs the workload with work counters (the counted pass).
-    fn run_counted(&self, work: Work<'_, WorkCounters>) -> (Output, WorkCounters);
-    /// The answers to `rays` (for validation).
-    fn answers(&self, rays: &RaySet, strategy: &Strategy) -> RayAnswers;
-    /// Size and quality of the structure (peers report what they can).
-    fn stats(&self) -> TreeStats;
-}
+use tracer::job::{self, Job, Output};
+use tracer::rays::{RayAnswers, RaySet};
+pub use tracer::structure::Structure;
 
 /// What a backend built, with what its rows say about it.
 pub struct Built {
@@ -35,59 +23,27 @@ impl Built {
     pub fn peer(accel: impl Accelerator + 'static, peer_info: String) -> Built {
         Built { structure: Box::new(Concrete(accel)), peer_info, simd_kernel: "-" }
     }
-}
 
-/// Hands the concrete structure to a visitor.
-trait Visit: Send + Sync {
-    fn visit<V: AccelVisitor>(&self, visitor: V) -> V::Output;
-}
-
-/// Any one [`Accelerator`].
-pub(super) struct Concrete<A>(pub A);
-
-impl<A: Accelerator> Visit for Concrete<A> {
-    fn visit<V: AccelVisitor>(&self, visitor: V) -> V::Output {
-        visitor.visit(&self.0)
+    /// The answers to `rays` (for validation).
+    pub fn answers(&self, rays: &RaySet, strategy: &Strategy) -> RayAnswers {
+        match self.structure.run(&Job::Rays(rays), strategy) {
+            Output::Answers(answers) => answers,
+            Output::Image(_) => unreachable!("a ray set's job answers its rays"),
+        }
     }
 }
 
-impl<P: WidePrimitive> Visit for BuiltAccel<P> {
-    fn visit<V: AccelVisitor>(&self, visitor: V) -> V::Output {
-        BuiltAccel::visit(self, visitor)
-    }
-}
+/// Any one [`Accelerator`] (a peer's), with the job loops compiled for it.
+struct Concrete<A>(A);
 
-/// The answers to a ray set.
-struct Answers<'a>(&'a RaySet, &'a Strategy);
-
-impl AccelVisitor for Answers<'_> {
-    type Output = RayAnswers;
-    fn visit<A: Accelerator>(self, a: &A) -> RayAnswers {
-        trace::<_, NoCounters>(a, self.0, self.1).0
+impl<A: Accelerator> Structure for Concrete<A> {
+    fn run(&self, job: &Job<'_>, strategy: &Strategy) -> Output {
+        job::run::<A, NoCounters>(&self.0, job, strategy).0
     }
-}
-
-/// The structure's statistics.
-struct Stats;
-
-impl AccelVisitor for Stats {
-    type Output = TreeStats;
-    fn visit<A: Accelerator>(self, a: &A) -> TreeStats {
-        a.stats()
-    }
-}
-
-impl<T: Visit> Structure for T {
-    fn run(&self, work: Work<'_, NoCounters>) -> Output {
-        self.visit(work).0
-    }
-    fn run_counted(&self, work: Work<'_, WorkCounters>) -> (Output, WorkCounters) {
-        self.visit(work)
-    }
-    fn answers(&self, rays: &RaySet, strategy: &Strategy) -> RayAnswers {
-        self.visit(Answers(rays, strategy))
+    fn run_counted(&self, job: &Job<'_>, strategy: &Strategy) -> (Output, WorkCounters) {
+        job::run::<A, WorkCounters>(&self.0, job, strategy)
     }
     fn stats(&self) -> TreeStats {
-        self.visit(Stats)
+        self.0.stats()
     }
 }

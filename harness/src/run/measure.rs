@@ -4,15 +4,17 @@
 use std::time::Instant;
 
 use schema::SceneName;
-use schema::Settings;
+use schema::{Settings, Workload};
 use serde::{Deserialize, Serialize};
 use tracer::accel::{Null, TreeStats};
 use tracer::counters::{NoCounters, WorkCounters};
 use tracer::geometry::{TrianglePrimitive, WatertightTriangle};
+use tracer::job::{Job, Output};
 use tracer::rays::{RayAnswers, RaySet, trace};
+use tracer::render::RenderSettings;
 use tracer::scene::{MeshScene, Scene, SceneKind, random_triangles, tessellate};
 
-use crate::backend::workload::{Output, Shaded, Work, bvhlab_phase_build};
+use crate::backend::workload::{bvhlab_phase_build, bvhlab_phase_trace};
 use crate::backend::{self, Geometry, Setup};
 use crate::error::Error;
 
@@ -95,11 +97,22 @@ impl SceneData {
         }
     }
 
-    /// What a render draws; a triangle scene's triangles come from [`SceneData::triangles`].
-    pub fn shaded<'a>(&'a self, triangles: &'a [WatertightTriangle]) -> Shaded<'a> {
+    /// The render job of this scene: a triangle scene's triangles come from [`SceneData::triangles`].
+    pub fn render<'a>(&'a self, settings: &Settings, triangles: &'a [WatertightTriangle]) -> Job<'a> {
         match self {
-            SceneData::Spheres(s) => Shaded::Spheres(s),
-            SceneData::Triangles(t) => Shaded::Triangles(t, triangles),
+            SceneData::Spheres(s) => Job::RenderSpheres(s, RenderSettings { max_depth: settings.max_depth }),
+            SceneData::Triangles(t) => Job::RenderTriangles(t, triangles),
+        }
+    }
+
+    /// The job of a timed run: the sphere scene's render (a timed run renders sphere scenes only), or `rays`.
+    pub fn job<'a>(&'a self, settings: &Settings, rays: Option<&'a RaySet>) -> Job<'a> {
+        match settings.workload {
+            Workload::Render => {
+                let scene = self.spheres().expect("the render workload of timed runs renders sphere scenes");
+                Job::RenderSpheres(scene, RenderSettings { max_depth: settings.max_depth })
+            }
+            Workload::Rays(_) => Job::Rays(rays.expect("ray-set workloads come with their rays")),
         }
     }
 
@@ -181,7 +194,8 @@ pub fn timed(settings: &Settings, file: Option<&Scene>, rays: Option<&RaySet>, s
     };
     let build_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let output = setup.install(|| built.structure.run(Work::new(scene.spheres().map(Shaded::Spheres), settings, rays)));
+    let (job, strategy) = (scene.job(settings, rays), settings.strategy());
+    let output = setup.install(|| bvhlab_phase_trace(|| built.structure.run(&job, &strategy)));
     let trace_s = t.elapsed().as_secs_f64();
     let encode_s = match &output {
         Output::Image(image) => encode_seconds(image),
@@ -223,13 +237,13 @@ pub fn counted(
     let scene = make_scene(settings, file);
     let setup = Setup::start(settings)?;
     let built = backend::of(settings.accel).build(settings, &scene.geometry(), &setup)?;
-    let (output, c) =
-        setup.install(|| built.structure.run_counted(Work::new(scene.spheres().map(Shaded::Spheres), settings, rays)));
+    let (job, strategy) = (scene.job(settings, rays), settings.strategy());
+    let (output, c) = setup.install(|| bvhlab_phase_trace(|| built.structure.run_counted(&job, &strategy)));
     let hash = output.hash();
     let answers = match (output, rays, answer_rays) {
         (_, _, None) => None,
         (Output::Answers(a), Some(r), Some(want)) if std::ptr::eq(r, want) => Some(a),
-        (_, _, Some(want)) => Some(setup.install(|| built.structure.answers(want, &settings.strategy()))),
+        (_, _, Some(want)) => Some(setup.install(|| built.answers(want, &strategy))),
     };
     Ok((c, hash, answers))
 }
