@@ -171,7 +171,7 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
-    /// Embree runs in worker processes of the harness binary: `harness/tests/cli.rs` runs it on meshes.
+    /// Embree runs in worker processes of the harness binary: `harness/tests/harness/cli.rs` runs it on meshes.
     #[test]
     fn a_quick_run_over_tessellated_spheres_validates_every_configuration() {
         let text = "name = \"tess\"\nrepetitions = 1\nwarmups = 0\n[sweep]\nscene = [\"tessellated-spheres\", \"random-triangles\"]\n\

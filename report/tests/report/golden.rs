@@ -1,6 +1,6 @@
 //! Golden test: a small hand-made runs.csv with obvious medians, written into a temp dir.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use schema::{Named, PeerKind};
 use tracer::accel::{AccelKind, Traversal};
 
-mod common;
+use crate::common;
 use common::harness;
 
 fn temp(name: &str) -> PathBuf {

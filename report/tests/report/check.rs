@@ -1,7 +1,7 @@
 //! `report::check` on synthetic rows: seeded noise around fixed medians, deterministic counters, instruction
 //! counts, one machine or two.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

@@ -1,6 +1,6 @@
 //! The speedup history: append runs, refuse duplicates, plot with regressions marked.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -1,0 +1,7 @@
+//! The harness's integration tests, one module a file, in one test binary (one link instead of four; docs/build.md).
+
+mod cli;
+mod common;
+mod count;
+mod site_browser;
+mod slurm;
