@@ -21,6 +21,7 @@ pub mod executor;
 pub mod fingerprint;
 pub mod geometry;
 pub mod job;
+pub mod parallel;
 pub mod rays;
 pub mod render;
 pub mod rng;

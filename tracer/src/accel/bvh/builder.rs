@@ -302,20 +302,22 @@ mod parallel {
         block: u32,
         leaf_below: usize,
     ) -> BuiltTree<P> {
-        use rayon::prelude::*;
+        use crate::parallel::map_indices;
+        let n = spheres.len();
         let boxes: Vec<Aabb> = match params.split {
-            Split::SweepSah => spheres.par_iter().with_min_len(PASS_CHUNK).map(P::bounds).collect(),
+            Split::SweepSah => map_indices(n, PASS_CHUNK, |i| spheres[i].bounds()),
             _ => Vec::new(),
         };
-        let centroids: Vec<Vec3> = spheres.par_iter().with_min_len(PASS_CHUNK).map(P::centroid).collect();
+        let centroids: Vec<Vec3> = map_indices(n, PASS_CHUNK, |i| spheres[i].centroid());
         let inputs = Inputs { params, block, leaf_below, spheres, boxes: &boxes, centroids: &centroids };
-        let mut prims: Vec<u32> = (0..spheres.len() as u32).into_par_iter().with_min_len(PASS_CHUNK).collect();
-        let mut refs: Vec<P::Ref> = spheres.par_iter().with_min_len(PASS_CHUNK).map(P::reference).collect();
+        let mut prims: Vec<u32> = map_indices(n, PASS_CHUNK, |i| i as u32);
+        let mut refs: Vec<P::Ref> = map_indices(n, PASS_CHUNK, |i| P::reference(&spheres[i]));
         // The union of the chunks' bounds is that of the serial pass: minima and maxima in any order.
-        let root = refs.par_chunks(PASS_CHUNK).map(NodeBounds::of).reduce_with(NodeBounds::union);
+        let root = crate::parallel::map(refs.chunks(PASS_CHUNK).collect(), NodeBounds::of)
+            .into_iter()
+            .reduce(NodeBounds::union);
         let nodes = build(inputs, &mut prims, &mut refs, root.unwrap_or(NodeBounds::EMPTY));
-        let ordered =
-            refs.par_iter().zip(&prims).with_min_len(PASS_CHUNK).map(|(r, &id)| P::from_ref(r, spheres, id)).collect();
+        let ordered = map_indices(n, PASS_CHUNK, |i| P::from_ref(&refs[i], spheres, prims[i]));
         BuiltTree { nodes, prim_order: prims, ordered }
     }
 

@@ -16,12 +16,11 @@
 //! tasks' nodes spliced in where the serial recursion would have emitted them, their references shifted. So the
 //! tree is the serial one whatever the thread count.
 
-use rayon::prelude::*;
-
 use super::leaf::{LeafBlock, WidePrimitive};
 use super::node::{ChildRef, WideNode};
 use crate::accel::bvh::builder::BuiltTree;
 use crate::geometry::{Aabb, Sphere};
+use crate::parallel;
 
 /// Trees of at least this many spheres collapse in parallel (when the pool has more than one thread), and their
 /// wide nodes of at least this many spheres are the serial top above the parallel tasks.
@@ -31,6 +30,9 @@ use crate::geometry::{Aabb, Sphere};
 /// at 1e5) to balance over the threads, below a top of tens of wide nodes. On two cores, 2048, 8192 and 32768
 /// collapsed 1e5 and 1e6 random spheres equally fast within noise (1e6: 45 ms serial, 19-21 ms in parallel).
 pub const PARALLEL_COLLAPSE_MIN_PRIMS: usize = 1 << 13;
+
+/// Blocks per task when the parallel collapse lays out its padding blocks.
+const PADDING_CHUNK: usize = 1 << 12;
 
 /// A wide tree: nodes (the root first, depth-first) and the blocks their leaves refer to.
 #[derive(Clone, Debug)]
@@ -185,25 +187,21 @@ impl<P: WidePrimitive, const W: usize, const B: usize> Collapser<'_, P, W, B> {
         // The tasks in serial order, each with the blocks of the top's leaves just before it; then the last leaves'.
         let (mut tasks, mut leaf_blocks) = (Vec::new(), 0);
         self.tasks(0, &mut tasks, &mut leaf_blocks);
-        let counts: Vec<usize> = tasks.par_iter().map(|&(k, _)| self.block_count(k)).collect();
+        let counts: Vec<usize> = parallel::map(tasks.clone(), |(k, _)| self.block_count(k));
         let total = leaf_blocks + tasks.iter().zip(&counts).map(|(&(_, before), &n)| before + n).sum::<usize>();
-        let mut blocks = Vec::with_capacity(total);
-        blocks.par_extend(rayon::iter::repeat_n(P::Block::<B>::PADDING, total));
+        let mut blocks = parallel::filled(&P::Block::<B>::PADDING, total, PADDING_CHUNK);
         let (mut runs, mut rest) = (Vec::with_capacity(tasks.len()), &mut blocks[..]);
         for (&(k, before), &n) in tasks.iter().zip(&counts) {
             let (run, after) = rest[before..].split_at_mut(n);
             runs.push((k, run));
             rest = after;
         }
-        let pieces: Vec<Vec<WideNode<W>>> = runs
-            .into_par_iter()
-            .map(|(k, run)| {
-                let (mut nodes, mut run) = (Vec::new(), Run { blocks: run, len: 0 });
-                self.node(&mut nodes, &mut run, k);
-                debug_assert_eq!(run.len, run.blocks.len());
-                nodes
-            })
-            .collect();
+        let pieces: Vec<Vec<WideNode<W>>> = parallel::map(runs, |(k, run)| {
+            let (mut nodes, mut run) = (Vec::new(), Run { blocks: run, len: 0 });
+            self.node(&mut nodes, &mut run, k);
+            debug_assert_eq!(run.len, run.blocks.len());
+            nodes
+        });
         let mut nodes = Vec::with_capacity(1 + pieces.iter().map(Vec::len).sum::<usize>());
         let mut pieces = pieces.into_iter().zip(counts);
         self.top(&mut nodes, &mut Run { blocks: &mut blocks, len: 0 }, 0, &mut pieces);

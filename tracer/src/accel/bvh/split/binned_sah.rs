@@ -10,7 +10,6 @@
 //! with the first non-match before it) is the tree's primitive order, which a parallel partition would change.
 
 use glam::Vec3A;
-use rayon::prelude::*;
 
 use super::{Box3A, BuildRef, Decision, NodeBounds, NodeView, partition, proper};
 use crate::accel::bvh::sah::CostModel;
@@ -86,19 +85,17 @@ fn bin_all<R: BuildRef>(bins: &mut [Bin], bin_count: usize, refs: &[R], min: Vec
 
 /// [`bin_all`] over chunks of `refs` in parallel, the chunks' bins merged into `bins`.
 fn bin_all_parallel<R: BuildRef>(bins: &mut [Bin], bin_count: usize, refs: &[R], min: Vec3A, scale: Vec3A) {
-    let merged = refs
-        .par_chunks(BIN_CHUNK)
-        .fold(
-            || vec![Bin::EMPTY; bins.len()],
-            |mut acc, chunk| {
-                bin_all(&mut acc, bin_count, chunk, min, scale);
-                acc
-            },
-        )
-        .reduce_with(|mut a, b| {
-            a.iter_mut().zip(&b).for_each(|(a, b)| a.merge(b));
-            a
-        });
+    // Bins merge exactly (minima, maxima and counts), so the chunks' order does not matter.
+    let merged = crate::parallel::map(refs.chunks(BIN_CHUNK).collect(), |chunk| {
+        let mut acc = vec![Bin::EMPTY; bins.len()];
+        bin_all(&mut acc, bin_count, chunk, min, scale);
+        acc
+    })
+    .into_iter()
+    .reduce(|mut a, b| {
+        a.iter_mut().zip(&b).for_each(|(a, b)| a.merge(b));
+        a
+    });
     if let Some(merged) = merged {
         bins.copy_from_slice(&merged);
     }
