@@ -4,14 +4,12 @@
 //! - [`params`]: width, leaf block, kernel and child order ([`WideParams`]);
 //! - [`node`]: the wide node (child boxes per axis, 64-byte aligned); [`leaf`]: the primitive blocks;
 //! - [`collapse`]: from the shared binary builder's tree (built with the SAH counting leaf blocks) to wide nodes;
-//! - [`ray`], [`order`], [`traverse`]: the traversal, generic over [`kernel`] (scalar, AVX2, AVX-512) and
-//!   counters, the child order a value; [`packet`]: packets of 8 or 16 rays with an active mask; [`tile`]: frustum-culled packets
+//! - [`ray`], [`order`], [`traverse`]: the traversal, generic over [`kernel`] (scalar, AVX2, AVX-512), child
+//!   order and counters; [`packet`]: packets of 8 or 16 rays with an active mask; [`tile`]: frustum-culled packets
 //!   of an 8×8 tile of camera rays.
 //!
 //! [`WideBvh`] holds one of six layouts (width × leaf block) and the kernel resolved at build time; each query
-//! dispatches once (layout, kernel) into a traversal compiled for exactly that combination. A single ray is a batch
-//! of one, and the child order a branch per node of several hit children, so that each layout and kernel compiles
-//! one closest-hit and one any-hit traversal (docs/build.md: the compile time of the whole space).
+//! dispatches once (layout, order, kernel) into a traversal compiled for exactly that combination.
 
 pub mod collapse;
 pub mod kernel;
@@ -28,9 +26,10 @@ use collapse::{Tree, collapse};
 use kernel::Query;
 #[cfg(target_arch = "x86_64")]
 use kernel::simd::Simd;
+use order::{ByOctant, Nearest, Order, Stored};
 use packet::Packets;
 use tile::Tiles;
-use traverse::{AnyBatch, ClosestBatch};
+use traverse::{Any, AnyBatch, Closest, ClosestBatch};
 
 pub use leaf::{LeafBlock, WidePrimitive};
 pub use params::{ChildOrdering, Kernel, WideParams};
@@ -40,8 +39,6 @@ use super::{Accelerator, Hit};
 use crate::counters::Counters;
 use crate::fingerprint::Fnv64;
 use crate::geometry::{Aabb, Ray, Sphere};
-use crate::render::PrimaryHits;
-use leaf::PAD;
 
 /// The tree in one of its layouts (width × leaf block).
 #[derive(Clone, Debug)]
@@ -150,30 +147,52 @@ impl<P: WidePrimitive> WideBvh<P> {
         }
     }
 
-    /// Runs `query` with this tree's layout and kernel: the one dispatch per query (the child order travels in
-    /// single-ray queries as a value; packet queries order children by the packet's entry distances).
+    /// Runs `query` with this tree's layout, child order and kernel: the one dispatch per query.
     #[inline(always)]
     fn dispatch<Q: Query>(&self, query: Q) -> Q::Out {
         match &self.layout {
-            Layout::W4B4(t) => self.run(t, query),
-            Layout::W4B8(t) => self.run(t, query),
-            Layout::W4B16(t) => self.run(t, query),
-            Layout::W8B4(t) => self.run(t, query),
-            Layout::W8B8(t) => self.run(t, query),
-            Layout::W8B16(t) => self.run(t, query),
+            Layout::W4B4(t) => self.ordered(t, query),
+            Layout::W4B8(t) => self.ordered(t, query),
+            Layout::W4B16(t) => self.ordered(t, query),
+            Layout::W8B4(t) => self.ordered(t, query),
+            Layout::W8B8(t) => self.ordered(t, query),
+            Layout::W8B16(t) => self.ordered(t, query),
+        }
+    }
+
+    /// [`WideBvh::dispatch`] for packet queries, which order children by the packet's entry distances whatever
+    /// the child order (so they are compiled once, not once per order).
+    #[inline(always)]
+    fn dispatch_packets<Q: Query>(&self, query: Q) -> Q::Out {
+        match &self.layout {
+            Layout::W4B4(t) => self.run::<Q, Nearest, 4, 4>(t, query),
+            Layout::W4B8(t) => self.run::<Q, Nearest, 4, 8>(t, query),
+            Layout::W4B16(t) => self.run::<Q, Nearest, 4, 16>(t, query),
+            Layout::W8B4(t) => self.run::<Q, Nearest, 8, 4>(t, query),
+            Layout::W8B8(t) => self.run::<Q, Nearest, 8, 8>(t, query),
+            Layout::W8B16(t) => self.run::<Q, Nearest, 8, 16>(t, query),
         }
     }
 
     #[inline(always)]
-    fn run<Q: Query, const W: usize, const B: usize>(&self, tree: &Tree<W, B, P>, query: Q) -> Q::Out {
+    fn ordered<Q: Query, const W: usize, const B: usize>(&self, tree: &Tree<W, B, P>, query: Q) -> Q::Out {
+        match self.params.order {
+            ChildOrdering::None => self.run::<Q, Stored, W, B>(tree, query),
+            ChildOrdering::Distance => self.run::<Q, Nearest, W, B>(tree, query),
+            ChildOrdering::Octant => self.run::<Q, ByOctant, W, B>(tree, query),
+        }
+    }
+
+    #[inline(always)]
+    fn run<Q: Query, O: Order, const W: usize, const B: usize>(&self, tree: &Tree<W, B, P>, query: Q) -> Q::Out {
         match self.kernel {
             // SAFETY: the kernel was validated as available on this CPU when it was chosen.
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 => unsafe { kernel::avx2::Avx2::run::<Q, P, W, B>(query, tree) },
+            Kernel::Avx2 => unsafe { kernel::avx2::Avx2::run::<Q, O, P, W, B>(query, tree) },
             // SAFETY: as above.
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx512 => unsafe { kernel::avx512::Avx512::run::<Q, P, W, B>(query, tree) },
-            _ => kernel::scalar::run::<Q, P, W, B>(query, tree),
+            Kernel::Avx512 => unsafe { kernel::avx512::Avx512::run::<Q, O, P, W, B>(query, tree) },
+            _ => kernel::scalar::run::<Q, O, P, W, B>(query, tree),
         }
     }
 }
@@ -216,25 +235,11 @@ fn stats<P: WidePrimitive, const W: usize, const B: usize>(tree: &Tree<W, B, P>)
 
 impl<P: WidePrimitive> Accelerator for WideBvh<P> {
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
-        let mut hit = [PrimaryHits::MISS];
-        self.dispatch(ClosestBatch {
-            rays: std::slice::from_ref(ray),
-            out: &mut hit,
-            counters,
-            order: self.params.order,
-        });
-        (hit[0].prim != PAD).then_some(hit[0])
+        self.dispatch(Closest { ray, counters })
     }
 
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
-        let mut occluded = [false];
-        self.dispatch(AnyBatch {
-            rays: std::slice::from_ref(ray),
-            out: &mut occluded,
-            counters,
-            order: self.params.order,
-        });
-        occluded[0]
+        self.dispatch(Any { ray, counters })
     }
 
     fn stats(&self) -> TreeStats {
@@ -243,25 +248,19 @@ impl<P: WidePrimitive> Accelerator for WideBvh<P> {
 
     fn intersect_batch<C: Counters>(&self, rays: &[Ray], out: &mut [Hit], counters: &mut C) {
         match self.params.packet {
-            8 => self.dispatch(Packets::<C, _, 8> { rays, out, counters }),
-            16 => self.dispatch(Packets::<C, _, 16> { rays, out, counters }),
-            64 => self.dispatch(Tiles { rays, out, counters }),
-            _ => {
-                rays.iter().for_each(|_| counters.ray());
-                self.dispatch(ClosestBatch { rays, out, counters, order: self.params.order })
-            }
+            8 => self.dispatch_packets(Packets::<C, _, 8> { rays, out, counters }),
+            16 => self.dispatch_packets(Packets::<C, _, 16> { rays, out, counters }),
+            64 => self.dispatch_packets(Tiles { rays, out, counters }),
+            _ => self.dispatch(ClosestBatch { rays, out, counters }),
         }
     }
 
     fn occluded_batch<C: Counters>(&self, rays: &[Ray], out: &mut [bool], counters: &mut C) {
         match self.params.packet {
-            8 => self.dispatch(Packets::<C, _, 8> { rays, out, counters }),
-            16 => self.dispatch(Packets::<C, _, 16> { rays, out, counters }),
-            64 => self.dispatch(Tiles { rays, out, counters }),
-            _ => {
-                rays.iter().for_each(|_| counters.ray());
-                self.dispatch(AnyBatch { rays, out, counters, order: self.params.order })
-            }
+            8 => self.dispatch_packets(Packets::<C, _, 8> { rays, out, counters }),
+            16 => self.dispatch_packets(Packets::<C, _, 16> { rays, out, counters }),
+            64 => self.dispatch_packets(Tiles { rays, out, counters }),
+            _ => self.dispatch(AnyBatch { rays, out, counters }),
         }
     }
 }

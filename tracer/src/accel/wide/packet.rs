@@ -25,6 +25,7 @@ use super::collapse::Tree;
 use super::kernel::{Ops, Query};
 use super::leaf::{LeafBlock, PAD, WidePrimitive};
 use super::node::{ChildRef, WideNode};
+use super::order::Order;
 use super::ray::RayLanes;
 use crate::accel::Hit;
 use crate::accel::bvh::builder::MAX_DEPTH;
@@ -406,7 +407,10 @@ pub struct Packets<'a, C, A, const P: usize> {
 impl<C: Counters, A: Answer, const P: usize> Query for Packets<'_, C, A, P> {
     type Out = ();
     #[inline(always)]
-    unsafe fn run<K: Ops, Prim: WidePrimitive, const W: usize, const B: usize>(self, tree: &Tree<W, B, Prim>) {
+    unsafe fn run<K: Ops, O: Order, Prim: WidePrimitive, const W: usize, const B: usize>(
+        self,
+        tree: &Tree<W, B, Prim>,
+    ) {
         const { assert!(P <= 64, "the active mask is a u64") };
         let mut packet = Packet::empty();
         for (rays, out) in self.rays.chunks(P).zip(self.out.chunks_mut(P)) {

@@ -28,6 +28,7 @@
 use super::collapse::Tree;
 use super::kernel::{Ops, Query};
 use super::leaf::WidePrimitive;
+use super::order::Order;
 use super::packet::{Answer, CULL_SLACK, Enter, Entry, Masked, Packet, Visit, bits};
 use super::ray::FrustumLanes;
 use crate::counters::Counters;
@@ -152,7 +153,10 @@ struct OnePacket<'a, C, A, const RANGED: bool> {
 impl<C: Counters, A: Answer, const RANGED: bool> Query for OnePacket<'_, C, A, RANGED> {
     type Out = ();
     #[inline(always)]
-    unsafe fn run<K: Ops, Prim: WidePrimitive, const W: usize, const B: usize>(self, tree: &Tree<W, B, Prim>) {
+    unsafe fn run<K: Ops, O: Order, Prim: WidePrimitive, const W: usize, const B: usize>(
+        self,
+        tree: &Tree<W, B, Prim>,
+    ) {
         let (packet, out, counters) = (self.packet, self.out, self.counters);
         // SAFETY (both): forwarded from the caller.
         if RANGED {
@@ -167,7 +171,10 @@ impl<C: Counters, A: Answer, const RANGED: bool> Query for OnePacket<'_, C, A, R
 impl<C: Counters, A: Answer> Query for Tiles<'_, C, A> {
     type Out = ();
     #[inline(always)]
-    unsafe fn run<K: Ops, Prim: WidePrimitive, const W: usize, const B: usize>(self, tree: &Tree<W, B, Prim>) {
+    unsafe fn run<K: Ops, O: Order, Prim: WidePrimitive, const W: usize, const B: usize>(
+        self,
+        tree: &Tree<W, B, Prim>,
+    ) {
         let packet = &mut Packet::empty();
         for (rays, out) in self.rays.chunks(TILE_RAYS).zip(self.out.chunks_mut(TILE_RAYS)) {
             (0..rays.len()).for_each(|_| self.counters.ray());
@@ -177,11 +184,11 @@ impl<C: Counters, A: Answer> Query for Tiles<'_, C, A> {
             // SAFETY (both): forwarded from the caller.
             if frustum.is_one_octant() {
                 unsafe {
-                    K::run_apart::<_, Prim, W, B>(OnePacket::<C, A, true> { packet, frustum, out, counters }, tree)
+                    K::run_apart::<_, O, Prim, W, B>(OnePacket::<C, A, true> { packet, frustum, out, counters }, tree)
                 }
             } else {
                 unsafe {
-                    K::run_apart::<_, Prim, W, B>(OnePacket::<C, A, false> { packet, frustum, out, counters }, tree)
+                    K::run_apart::<_, O, Prim, W, B>(OnePacket::<C, A, false> { packet, frustum, out, counters }, tree)
                 }
             }
         }

@@ -1,7 +1,7 @@
-//! Closest-hit and any-hit traversal of a wide tree, generic over kernel and counters (the child order is a value).
+//! Closest-hit and any-hit traversal of a wide tree, generic over kernel, child order and counters.
 //!
 //! A node's children are box-tested at once; a single hit child is visited directly, several are pushed in the
-//! [`ChildOrdering`]'s order with their entry distances and the first popped. Popped entries whose entry distance is not
+//! [`Order`]'s order with their entry distances and the first popped. Popped entries whose entry distance is not
 //! below the current closest hit are skipped. A leaf tests its blocks one after the other.
 //!
 //! Counters: one `node_visit` per wide node taken (leaves are not nodes here; their work is the sphere tests),
@@ -15,8 +15,7 @@ use super::collapse::Tree;
 use super::kernel::{Ops, Query};
 use super::leaf::{LeafBlock, PAD, WidePrimitive};
 use super::node::ChildRef;
-use super::order::Entry;
-use super::params::ChildOrdering;
+use super::order::{Entry, Order};
 use super::ray::RayLanes;
 use crate::accel::Hit;
 use crate::accel::bvh::builder::MAX_DEPTH;
@@ -92,14 +91,13 @@ impl Stack {
 
 /// Where the traversal goes next: into `ChildRef`, or back to the stack.
 #[inline(always)]
-unsafe fn enter<K: Ops, C: Counters, Prim: WidePrimitive, const W: usize, const B: usize>(
+unsafe fn enter<K: Ops, O: Order, C: Counters, Prim: WidePrimitive, const W: usize, const B: usize>(
     tree: &Tree<W, B, Prim>,
     node: ChildRef,
     r: &RayLanes,
     t_max: f32,
     stack: &mut Stack,
     counters: &mut C,
-    order: ChildOrdering,
 ) -> Option<ChildRef> {
     debug_assert!(node.index() < tree.nodes.len());
     // SAFETY: node references come from the collapse, which emits every node it refers to.
@@ -116,7 +114,7 @@ unsafe fn enter<K: Ops, C: Counters, Prim: WidePrimitive, const W: usize, const 
     } else if hits & (hits - 1) == 0 {
         Some(node.children[hits.trailing_zeros() as usize])
     } else {
-        order.push(node, hits, &dist, r.octant, stack);
+        O::push(node, hits, &dist, r.octant, stack);
         stack.pop().map(|e| e.0)
     }
 }
@@ -137,11 +135,10 @@ fn next(stack: &mut Stack, t_max: f32) -> Option<ChildRef> {
 /// # Safety
 /// The CPU supports `K`'s instructions.
 #[inline(always)]
-pub unsafe fn closest<K: Ops, C: Counters, Prim: WidePrimitive, const W: usize, const B: usize>(
+pub unsafe fn closest<K: Ops, O: Order, C: Counters, Prim: WidePrimitive, const W: usize, const B: usize>(
     tree: &Tree<W, B, Prim>,
     ray: &Ray,
     counters: &mut C,
-    order: ChildOrdering,
 ) -> Option<Hit> {
     let r = RayLanes::for_leaves::<Prim>(ray);
     let mut t_max = ray.t_max;
@@ -151,7 +148,7 @@ pub unsafe fn closest<K: Ops, C: Counters, Prim: WidePrimitive, const W: usize, 
     while let Some(child) = at {
         if child.is_node() {
             // SAFETY: forwarded from the caller.
-            at = unsafe { enter::<K, C, Prim, W, B>(tree, child, &r, t_max, &mut stack, counters, order) };
+            at = unsafe { enter::<K, O, C, Prim, W, B>(tree, child, &r, t_max, &mut stack, counters) };
             if at.is_some() {
                 continue;
             }
@@ -179,11 +176,10 @@ pub unsafe fn closest<K: Ops, C: Counters, Prim: WidePrimitive, const W: usize, 
 /// # Safety
 /// The CPU supports `K`'s instructions.
 #[inline(always)]
-pub unsafe fn any<K: Ops, C: Counters, Prim: WidePrimitive, const W: usize, const B: usize>(
+pub unsafe fn any<K: Ops, O: Order, C: Counters, Prim: WidePrimitive, const W: usize, const B: usize>(
     tree: &Tree<W, B, Prim>,
     ray: &Ray,
     counters: &mut C,
-    order: ChildOrdering,
 ) -> bool {
     let r = RayLanes::for_leaves::<Prim>(ray);
     let mut stack = Stack::new();
@@ -191,7 +187,7 @@ pub unsafe fn any<K: Ops, C: Counters, Prim: WidePrimitive, const W: usize, cons
     while let Some(child) = at {
         if child.is_node() {
             // SAFETY: forwarded from the caller.
-            at = unsafe { enter::<K, C, Prim, W, B>(tree, child, &r, ray.t_max, &mut stack, counters, order) };
+            at = unsafe { enter::<K, O, C, Prim, W, B>(tree, child, &r, ray.t_max, &mut stack, counters) };
             if at.is_some() {
                 continue;
             }
@@ -212,8 +208,23 @@ pub unsafe fn any<K: Ops, C: Counters, Prim: WidePrimitive, const W: usize, cons
     false
 }
 
-/// Nearest hits of a batch ([`PrimaryHits::MISS`] for misses). A single ray is a batch of one, so each kernel,
-/// order and layout compiles one closest-hit traversal; the caller counts the rays.
+/// The nearest hit of one ray.
+pub struct Closest<'a, C> {
+    /// The ray.
+    pub ray: &'a Ray,
+    /// Where its work is counted.
+    pub counters: &'a mut C,
+}
+
+/// Whether one ray hits anything.
+pub struct Any<'a, C> {
+    /// The ray.
+    pub ray: &'a Ray,
+    /// Where its work is counted.
+    pub counters: &'a mut C,
+}
+
+/// Nearest hits of a batch ([`PrimaryHits::MISS`] for misses), one `ray` count per ray.
 pub struct ClosestBatch<'a, C> {
     /// The rays.
     pub rays: &'a [Ray],
@@ -221,11 +232,9 @@ pub struct ClosestBatch<'a, C> {
     pub out: &'a mut [Hit],
     /// Where their work is counted.
     pub counters: &'a mut C,
-    /// The order children are visited in.
-    pub order: ChildOrdering,
 }
 
-/// Occlusion of a batch (a single ray is a batch of one); the caller counts the rays.
+/// Occlusion of a batch, one `ray` count per ray.
 pub struct AnyBatch<'a, C> {
     /// The rays.
     pub rays: &'a [Ray],
@@ -233,18 +242,43 @@ pub struct AnyBatch<'a, C> {
     pub out: &'a mut [bool],
     /// Where their work is counted.
     pub counters: &'a mut C,
-    /// The order children are visited in.
-    pub order: ChildOrdering,
+}
+
+impl<C: Counters> Query for Closest<'_, C> {
+    type Out = Option<Hit>;
+    #[inline(always)]
+    unsafe fn run<K: Ops, O: Order, Prim: WidePrimitive, const W: usize, const B: usize>(
+        self,
+        tree: &Tree<W, B, Prim>,
+    ) -> Option<Hit> {
+        // SAFETY: forwarded from the caller.
+        unsafe { closest::<K, O, C, Prim, W, B>(tree, self.ray, self.counters) }
+    }
+}
+
+impl<C: Counters> Query for Any<'_, C> {
+    type Out = bool;
+    #[inline(always)]
+    unsafe fn run<K: Ops, O: Order, Prim: WidePrimitive, const W: usize, const B: usize>(
+        self,
+        tree: &Tree<W, B, Prim>,
+    ) -> bool {
+        // SAFETY: forwarded from the caller.
+        unsafe { any::<K, O, C, Prim, W, B>(tree, self.ray, self.counters) }
+    }
 }
 
 impl<C: Counters> Query for ClosestBatch<'_, C> {
     type Out = ();
     #[inline(always)]
-    unsafe fn run<K: Ops, Prim: WidePrimitive, const W: usize, const B: usize>(self, tree: &Tree<W, B, Prim>) {
+    unsafe fn run<K: Ops, O: Order, Prim: WidePrimitive, const W: usize, const B: usize>(
+        self,
+        tree: &Tree<W, B, Prim>,
+    ) {
         for (ray, out) in self.rays.iter().zip(self.out) {
+            self.counters.ray();
             // SAFETY: forwarded from the caller.
-            *out = unsafe { closest::<K, C, Prim, W, B>(tree, ray, self.counters, self.order) }
-                .unwrap_or(PrimaryHits::MISS);
+            *out = unsafe { closest::<K, O, C, Prim, W, B>(tree, ray, self.counters) }.unwrap_or(PrimaryHits::MISS);
         }
     }
 }
@@ -252,10 +286,14 @@ impl<C: Counters> Query for ClosestBatch<'_, C> {
 impl<C: Counters> Query for AnyBatch<'_, C> {
     type Out = ();
     #[inline(always)]
-    unsafe fn run<K: Ops, Prim: WidePrimitive, const W: usize, const B: usize>(self, tree: &Tree<W, B, Prim>) {
+    unsafe fn run<K: Ops, O: Order, Prim: WidePrimitive, const W: usize, const B: usize>(
+        self,
+        tree: &Tree<W, B, Prim>,
+    ) {
         for (ray, out) in self.rays.iter().zip(self.out) {
+            self.counters.ray();
             // SAFETY: forwarded from the caller.
-            *out = unsafe { any::<K, C, Prim, W, B>(tree, ray, self.counters, self.order) };
+            *out = unsafe { any::<K, O, C, Prim, W, B>(tree, ray, self.counters) };
         }
     }
 }

@@ -8,6 +8,7 @@ use super::Query;
 use super::simd::Simd;
 use crate::accel::wide::collapse::Tree;
 use crate::accel::wide::leaf::WidePrimitive;
+use crate::accel::wide::order::Order;
 
 /// The AVX2 kernel.
 pub struct Avx2;
@@ -21,11 +22,11 @@ impl Simd for Avx2 {
     /// The CPU supports AVX2 and FMA ([`crate::accel::wide::Kernel::Avx2`] is available).
     #[inline(never)]
     #[target_feature(enable = "avx2,fma")]
-    unsafe fn run<Q: Query, Prim: WidePrimitive, const W: usize, const B: usize>(
+    unsafe fn run<Q: Query, O: Order, Prim: WidePrimitive, const W: usize, const B: usize>(
         query: Q,
         tree: &Tree<W, B, Prim>,
     ) -> Q::Out {
         // SAFETY: the caller checked the CPU.
-        unsafe { query.run::<Self, Prim, W, B>(tree) }
+        unsafe { query.run::<Self, O, Prim, W, B>(tree) }
     }
 }

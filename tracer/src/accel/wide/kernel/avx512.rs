@@ -7,6 +7,7 @@ use super::Query;
 use super::simd::Simd;
 use crate::accel::wide::collapse::Tree;
 use crate::accel::wide::leaf::WidePrimitive;
+use crate::accel::wide::order::Order;
 
 /// The AVX-512 kernel.
 pub struct Avx512;
@@ -20,11 +21,11 @@ impl Simd for Avx512 {
     /// The CPU supports AVX-512F, AVX2 and FMA ([`crate::accel::wide::Kernel::Avx512`] is available).
     #[inline(never)]
     #[target_feature(enable = "avx512f,avx2,fma")]
-    unsafe fn run<Q: Query, Prim: WidePrimitive, const W: usize, const B: usize>(
+    unsafe fn run<Q: Query, O: Order, Prim: WidePrimitive, const W: usize, const B: usize>(
         query: Q,
         tree: &Tree<W, B, Prim>,
     ) -> Q::Out {
         // SAFETY: the caller checked the CPU.
-        unsafe { query.run::<Self, Prim, W, B>(tree) }
+        unsafe { query.run::<Self, O, Prim, W, B>(tree) }
     }
 }

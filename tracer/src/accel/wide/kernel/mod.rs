@@ -23,6 +23,7 @@ pub mod simd;
 use super::collapse::Tree;
 use super::leaf::{LeafBlock, WidePrimitive};
 use super::node::WideNode;
+use super::order::Order;
 use super::ray::{FrustumLanes, RayLanes};
 
 /// One kernel's box and sphere tests. Unsafe: callers run them only on a CPU with the kernel's instructions,
@@ -65,20 +66,23 @@ pub trait Ops {
     ///
     /// # Safety
     /// The CPU supports the kernel's instructions.
-    unsafe fn run_apart<Q: Query, P: WidePrimitive, const W: usize, const B: usize>(
+    unsafe fn run_apart<Q: Query, O: Order, P: WidePrimitive, const W: usize, const B: usize>(
         query: Q,
         tree: &Tree<W, B, P>,
     ) -> Q::Out;
 }
 
-/// Work run against a tree with a kernel chosen at compile time (a batch of rays, or a packet).
+/// Work run against a tree with a kernel and child order chosen at compile time (a ray, or a batch of rays).
 pub trait Query {
     /// The answer.
     type Out;
-    /// Runs the query with kernel `K`; implementations are `#[inline(always)]`, so that
+    /// Runs the query with kernel `K` and child order `O`; implementations are `#[inline(always)]`, so that
     /// they compile into the kernel's `run`.
     ///
     /// # Safety
     /// The CPU supports `K`'s instructions.
-    unsafe fn run<K: Ops, P: WidePrimitive, const W: usize, const B: usize>(self, tree: &Tree<W, B, P>) -> Self::Out;
+    unsafe fn run<K: Ops, O: Order, P: WidePrimitive, const W: usize, const B: usize>(
+        self,
+        tree: &Tree<W, B, P>,
+    ) -> Self::Out;
 }

@@ -4,6 +4,7 @@ use super::{Ops, Query};
 use crate::accel::wide::collapse::Tree;
 use crate::accel::wide::leaf::{LeafBlock, WidePrimitive};
 use crate::accel::wide::node::WideNode;
+use crate::accel::wide::order::Order;
 use crate::accel::wide::ray::{FrustumLanes, RayLanes};
 use crate::geometry::RayBoxTester;
 
@@ -12,9 +13,12 @@ pub struct Scalar;
 
 /// Runs `query` with the portable kernel.
 #[inline(never)]
-pub fn run<Q: Query, P: WidePrimitive, const W: usize, const B: usize>(query: Q, tree: &Tree<W, B, P>) -> Q::Out {
+pub fn run<Q: Query, O: Order, P: WidePrimitive, const W: usize, const B: usize>(
+    query: Q,
+    tree: &Tree<W, B, P>,
+) -> Q::Out {
     // SAFETY: the scalar kernel uses no optional instructions.
-    unsafe { query.run::<Scalar, P, W, B>(tree) }
+    unsafe { query.run::<Scalar, O, P, W, B>(tree) }
 }
 
 /// Entry distance into child `lane` of `node` before `t_max`, or `None` when missed: [`RayBoxTester::entry`]
@@ -55,11 +59,11 @@ fn frustum_entry<const W: usize>(node: &WideNode<W>, f: &FrustumLanes, t_max: f3
 
 impl Ops for Scalar {
     #[inline(always)]
-    unsafe fn run_apart<Q: Query, P: WidePrimitive, const W: usize, const B: usize>(
+    unsafe fn run_apart<Q: Query, O: Order, P: WidePrimitive, const W: usize, const B: usize>(
         query: Q,
         tree: &Tree<W, B, P>,
     ) -> Q::Out {
-        run::<Q, P, W, B>(query, tree)
+        run::<Q, O, P, W, B>(query, tree)
     }
 
     #[inline(always)]

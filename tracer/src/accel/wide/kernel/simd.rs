@@ -8,6 +8,7 @@ use super::{Ops, Query};
 use crate::accel::wide::collapse::Tree;
 use crate::accel::wide::leaf::{LeafBlock, WidePrimitive};
 use crate::accel::wide::node::WideNode;
+use crate::accel::wide::order::Order;
 use crate::accel::wide::ray::{FrustumLanes, RayLanes};
 
 /// A SIMD kernel: its vector for 16-sphere blocks and its entry, compiled for its instructions.
@@ -20,18 +21,20 @@ pub trait Simd {
     ///
     /// # Safety
     /// The CPU supports the kernel's instructions.
-    unsafe fn run<Q: Query, P: WidePrimitive, const W: usize, const B: usize>(query: Q, tree: &Tree<W, B, P>)
-    -> Q::Out;
+    unsafe fn run<Q: Query, O: Order, P: WidePrimitive, const W: usize, const B: usize>(
+        query: Q,
+        tree: &Tree<W, B, P>,
+    ) -> Q::Out;
 }
 
 impl<S: Simd> Ops for S {
     #[inline(always)]
-    unsafe fn run_apart<Q: Query, P: WidePrimitive, const W: usize, const B: usize>(
+    unsafe fn run_apart<Q: Query, O: Order, P: WidePrimitive, const W: usize, const B: usize>(
         query: Q,
         tree: &Tree<W, B, P>,
     ) -> Q::Out {
         // SAFETY: forwarded from the caller.
-        unsafe { S::run::<Q, P, W, B>(query, tree) }
+        unsafe { S::run::<Q, O, P, W, B>(query, tree) }
     }
 
     #[inline(always)]
