@@ -49,19 +49,21 @@ impl Backend for Ours {
     /// compiled for it (in the tracer: [`tracer::structure`]).
     fn build(&self, settings: &Settings, geometry: &Geometry<'_>, setup: &Setup) -> Result<Built, Error> {
         let params = settings.accel_params();
-        let structure = match *geometry {
-            Geometry::Spheres(spheres) => setup.install(|| structure::build(Primitives::Spheres(spheres), &params)),
+        let (moller_trumbore, watertight);
+        let prims = match *geometry {
+            Geometry::Spheres(spheres) => Primitives::Spheres(spheres),
             Geometry::Triangles(mesh) => match settings.triangle_test.unwrap_or(TriangleTest::Watertight) {
                 TriangleTest::MollerTrumbore => {
-                    let prims = MollerTrumboreTriangle::all(mesh.triangles());
-                    setup.install(|| structure::build(Primitives::MollerTrumbore(&prims), &params))
+                    moller_trumbore = MollerTrumboreTriangle::all(mesh.triangles());
+                    Primitives::MollerTrumbore(&moller_trumbore)
                 }
                 TriangleTest::Watertight => {
-                    let prims = WatertightTriangle::all(mesh.triangles());
-                    setup.install(|| structure::build(Primitives::Watertight(&prims), &params))
+                    watertight = WatertightTriangle::all(mesh.triangles());
+                    Primitives::Watertight(&watertight)
                 }
             },
         };
+        let structure = setup.install(|| structure::build(prims, &params));
         let simd_kernel = structure.simd_kernel().unwrap_or("-");
         Ok(Built { structure, peer_info: "-".into(), simd_kernel })
     }
