@@ -235,6 +235,7 @@ pub(crate) type PhaseCounts = [(&'static str, u64, Option<(u64, u64)>); 2];
 fn count_one(exe: &Path, plan: &Plan, c: &Configuration, how: How, dumps: &Path) -> Counted {
     let mut worker = worker_request(plan, c);
     worker.settings = image_settings(c, how.image);
+    worker.sample_s = 0.0; // one pass: instruction counts are per pass, and callgrind's clock is not the machine's
     let out = dumps.join(format!("{}.callgrind", c.id));
     let mut cmd = Command::new("valgrind");
     cmd.arg("--tool=callgrind")

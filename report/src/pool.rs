@@ -82,8 +82,34 @@ pub fn counterparts<'a>(
         .collect()
 }
 
-/// `median(metric over other's counterparts) / median(metric over group)`, with its interval;
-/// `None` when there is no counterpart or no sample. `key` seeds the bootstrap.
+/// The runs of `group` each paired with its one counterpart in series `other` from the same round: equal on every
+/// setting but those the series fix (seeds included, whatever `ratio_against` ignores) and on `repetition`. `None`
+/// unless every run of the group and every counterpart has exactly one partner, and both sides have `metric`.
+fn rounds(spec: &ReportSpec, runs: &[Run], other: &str, group: &[&Run], metric: &str) -> Option<(Vec<f64>, Vec<f64>)> {
+    let mut taken = std::collections::HashSet::new();
+    let mut pairs = (Vec::new(), Vec::new());
+    for run in group {
+        let mut partners = runs.iter().enumerate().filter(|(_, candidate)| {
+            candidate.series() == other
+                && candidate.row.repetition == run.row.repetition
+                && matches(spec, run, candidate, &[])
+        });
+        let (index, partner) = partners.next()?;
+        let (a, b) = (partner.num(metric), run.num(metric));
+        if partners.next().is_some() || !taken.insert(index) || !a.is_finite() || !b.is_finite() {
+            return None;
+        }
+        pairs.0.push(a);
+        pairs.1.push(b);
+    }
+    Some(pairs)
+}
+
+/// `metric(other) / metric(group)` at one point, with its interval; `None` when there is no counterpart or no
+/// sample. Where the two series ran in the same rounds (every run has one counterpart of the same repetition,
+/// see [`rounds`]) it is the median of the per-round ratios, its interval resampling rounds
+/// ([`stats::paired_ratio_ci`]); otherwise the ratio of the two medians, each side resampled on its own
+/// ([`stats::ratio_ci`]). `key` seeds the bootstrap.
 pub fn ratio_against(
     spec: &ReportSpec,
     runs: &[Run],
@@ -97,6 +123,12 @@ pub fn ratio_against(
     let denominator = samples(group.iter().copied(), metric);
     if numerator.is_empty() || denominator.is_empty() {
         return None;
+    }
+    if numerator.len() == denominator.len()
+        && numerator.len() > 1
+        && let Some((num, den)) = rounds(spec, runs, other, group, metric)
+    {
+        return Some(stats::paired_ratio_ci(&num, &den, stats::seed_for(key)));
     }
     Some(stats::ratio_ci(&numerator, &denominator, stats::seed_for(key)))
 }

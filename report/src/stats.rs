@@ -133,6 +133,15 @@ pub fn ratio_ci(numerator: &[f64], denominator: &[f64], seed: u64) -> Estimate {
     Estimate { value, lo, hi }
 }
 
+/// The median of the paired ratios `numerator[i] / denominator[i]` (two series timed in the same rounds) with its
+/// 95% bootstrap interval, which resamples whole pairs, so that what disturbed one round disturbs both sides of
+/// its ratio; `seed` fixes the resamples. The pairs' lengths must agree.
+pub fn paired_ratio_ci(numerator: &[f64], denominator: &[f64], seed: u64) -> Estimate {
+    assert_eq!(numerator.len(), denominator.len(), "paired samples come in pairs");
+    let ratios: Vec<f64> = numerator.iter().zip(denominator).map(|(n, d)| n / d).collect();
+    median_ci(&ratios, seed)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -199,6 +208,24 @@ mod tests {
         // No resample can leave the range min/max .. max/min.
         assert!(r.lo >= 10.0 / 2.2 && r.hi <= 12.0 / 1.8, "{r:?}");
         assert_eq!(r, ratio_ci(&num, &den, 99));
+    }
+
+    #[test]
+    fn paired_ratios_cancel_what_both_sides_of_a_round_share() {
+        // Each round slows both series alike (1x, 1.5x, 2x ...): independently the interval spans the slowdowns,
+        // paired it is the constant ratio 1.1 exactly.
+        let rounds = [1.0, 1.5, 2.0, 1.2, 3.0, 1.1, 1.7];
+        let den: Vec<f64> = rounds.to_vec();
+        let num: Vec<f64> = rounds.iter().map(|r| r * 1.1).collect();
+        let paired = paired_ratio_ci(&num, &den, 5);
+        assert!((paired.value - 1.1).abs() < 1e-12 && (paired.hi - paired.lo) < 1e-12, "{paired:?}");
+        let independent = ratio_ci(&num, &den, 5);
+        assert!(independent.hi - independent.lo > 0.5, "{independent:?}");
+        // A ratio that varies from round to round gets an interval around the median ratio.
+        let noisy: Vec<f64> = den.iter().zip([1.0, 1.2, 0.9, 1.1, 1.05, 0.95, 1.3]).map(|(d, r)| d * r).collect();
+        let e = paired_ratio_ci(&noisy, &den, 5);
+        assert_eq!(e.value, 1.05);
+        assert!(e.lo < e.value && e.value < e.hi && e.lo >= 0.9 && e.hi <= 1.3, "{e:?}");
     }
 
     #[test]

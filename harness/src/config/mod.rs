@@ -96,6 +96,7 @@ impl Repetitions {
 pub struct Quick {
     pub repetitions: Option<Repetitions>,
     pub warmups: Option<u32>,
+    pub sample_s: Option<f64>,
     pub sweep: AxisValues,
 }
 
@@ -115,6 +116,9 @@ pub struct Experiment {
     pub warmups: u32,
     pub order: RunOrder,
     pub order_seed: u64,
+    /// The shortest timed sample, in seconds (`sample_ms`): each timed run traces its job again until this much
+    /// time has passed and records the mean per pass (0: one pass).
+    pub sample_s: f64,
     pub sweep: AxisValues,
     /// `sweep.sphere_file`, resolved against the config's folder.
     pub sphere_file: Option<PathBuf>,
@@ -137,6 +141,7 @@ const TOP_KEYS: &[&str] = &[
     "warmups",
     "order",
     "order_seed",
+    "sample_ms",
     "sweep",
     "series",
     "exclude",
@@ -265,6 +270,7 @@ impl Experiment {
             warmups: top.integer("warmups", 0, 100)?.unwrap_or(0) as u32,
             order: parse_order(&top)?,
             order_seed: top.integer("order_seed", 0, i64::MAX)?.unwrap_or(0) as u64,
+            sample_s: sample_seconds(&top)?.unwrap_or(0.0),
             sweep,
             sphere_file: sweep_section.string("sphere_file")?.map(|f| dir.join(f)),
             exclude: parse_excludes(&top, &labels)?,
@@ -286,6 +292,7 @@ impl Experiment {
         if let Some(q) = self.quick.take() {
             self.repetitions = q.repetitions.unwrap_or(self.repetitions);
             self.warmups = q.warmups.unwrap_or(self.warmups);
+            self.sample_s = q.sample_s.unwrap_or(self.sample_s);
             self.sweep.extend(q.sweep);
         }
         self
@@ -373,12 +380,19 @@ fn parse_quick(top: &Section<'_>) -> Result<Option<Quick>, Error> {
     Ok(Some(Quick {
         repetitions: parse_repetitions(&q)?,
         warmups: q.integer("warmups", 0, 100)?.map(|v| v as u32),
+        sample_s: sample_seconds(&q)?,
         sweep: axis_values(&q, &REPETITION_KEYS)?,
     }))
 }
 
-/// The keys that say how many repetitions run (top level and `[quick]`), and `warmups`.
-const REPETITION_KEYS: [&str; 5] = ["repetitions", "min_repetitions", "max_repetitions", "target_ci_width", "warmups"];
+/// `sample_ms` in seconds.
+fn sample_seconds(s: &Section<'_>) -> Result<Option<f64>, Error> {
+    Ok(s.integer("sample_ms", 0, 10_000)?.map(|ms| ms as f64 / 1e3))
+}
+
+/// The keys that say how many repetitions run and how long a sample is (top level and `[quick]`), and `warmups`.
+const REPETITION_KEYS: [&str; 6] =
+    ["repetitions", "min_repetitions", "max_repetitions", "target_ci_width", "warmups", "sample_ms"];
 
 /// `repetitions` (an integer, or `"auto"` with `min_repetitions`, `max_repetitions` and `target_ci_width`);
 /// `None` when the section does not set it.

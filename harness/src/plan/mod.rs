@@ -55,6 +55,8 @@ pub struct Plan {
     pub notes: Vec<String>,
     /// The shard `(I, N)` this plan was cut to (see [`shard`]), if any.
     pub shard: Option<(usize, usize)>,
+    /// The shortest timed sample in seconds (the experiment's `sample_ms`; 0: one pass per timed run).
+    pub sample_s: f64,
 }
 
 /// A sphere file and its spheres.
@@ -183,7 +185,7 @@ impl Plan {
             ));
         }
         let runs = order::runs(exp, configurations.len());
-        Ok(Plan { configurations, runs, sphere_file, notes, shard: None })
+        Ok(Plan { configurations, runs, sphere_file, notes, shard: None, sample_s: exp.sample_s })
     }
 
     /// Drops the runs of the configurations whose backend cannot run here (Embree absent, a SIMD kernel this CPU

@@ -33,6 +33,13 @@ pub struct Timing {
     #[serde(default)]
     pub overhead_s: Option<f64>,
     pub encode_s: f64,
+    /// Passes of the job in the timed trace (`trace_s` is their mean); 1 in answers of earlier workers.
+    #[serde(default = "one")]
+    pub trace_passes: u32,
+    /// The hypervisor's steal time over all CPUs during the kept trace sample (`/proc/stat`, 10-ms ticks);
+    /// `None` where the kernel does not report it and in answers of earlier workers.
+    #[serde(default)]
+    pub steal_s: Option<f64>,
     /// Image hash (render) or ray-set answer hash.
     pub output_hash: u64,
     pub scene_fingerprint: u64,
@@ -48,6 +55,34 @@ fn dash() -> String {
     "-".into()
 }
 
+fn one() -> u32 {
+    1
+}
+
+/// Seconds per tick of `/proc/stat` (`USER_HZ`, 100 on Linux).
+const STAT_TICK_S: f64 = 0.01;
+
+/// The hypervisor's steal time so far, summed over all CPUs, in ticks (`/proc/stat`'s `cpu` line, 8th value).
+fn steal_ticks() -> Option<u64> {
+    let stat = std::fs::read_to_string("/proc/stat").ok()?;
+    stat.lines().next()?.split_whitespace().nth(8)?.parse().ok()
+}
+
+/// Attempts of a timed trace when steal time was seen during it (the sample with the least steal is kept).
+const STEAL_ATTEMPTS: u32 = 3;
+
+/// Runs `run` until at least `min_s` seconds have passed since `start` (at least once); the passes and the last
+/// pass's output.
+fn repeat<T>(start: Instant, min_s: f64, mut run: impl FnMut() -> T) -> (u32, T) {
+    let mut output = run();
+    let mut passes = 1u32;
+    while min_s > 0.0 && start.elapsed().as_secs_f64() < min_s {
+        output = run();
+        passes += 1;
+    }
+    (passes, output)
+}
+
 impl Timing {
     /// The timing of a configuration that was never timed (it failed validation): every phase NaN.
     pub fn untimed(output_hash: u64) -> Timing {
@@ -59,6 +94,8 @@ impl Timing {
             trace_s: nan,
             overhead_s: None,
             encode_s: nan,
+            trace_passes: 0,
+            steal_s: None,
             output_hash,
             scene_fingerprint: 0,
             stats: Default::default(),
@@ -178,8 +215,16 @@ fn encode_seconds(image: &tracer::render::Image) -> f64 {
 }
 
 /// Runs `settings` once with every phase timed (no counters), on what `setup` started. `rays` is the
-/// workload's ray set. Builds and traces run in the setup's pool.
-pub fn timed(settings: &Settings, file: Option<&Scene>, rays: Option<&RaySet>, setup: &Setup) -> Result<Timing, Error> {
+/// workload's ray set. Builds and traces run in the setup's pool. With `min_sample_s` above 0 the trace is one
+/// sample of at least that long (the job traced again until then; `trace_s` is the mean per pass), taken again, up
+/// to [`STEAL_ATTEMPTS`] times, when the hypervisor stole time during it; 0 traces once, as every earlier row did.
+pub fn timed(
+    settings: &Settings,
+    file: Option<&Scene>,
+    rays: Option<&RaySet>,
+    setup: &Setup,
+    min_sample_s: f64,
+) -> Result<Timing, Error> {
     let t = Instant::now();
     let scene = make_scene(settings, file);
     let scene_s = t.elapsed().as_secs_f64();
@@ -193,10 +238,28 @@ pub fn timed(settings: &Settings, file: Option<&Scene>, rays: Option<&RaySet>, s
         setup.install(|| bvhlab_phase_build(|| backend.build(settings, &scene.geometry(), setup)))?
     };
     let build_s = t.elapsed().as_secs_f64();
-    let t = Instant::now();
     let (job, strategy) = (scene.job(settings, rays), settings.strategy());
-    let output = setup.install(|| bvhlab_phase_trace(|| built.structure.run(&job, &strategy)));
-    let trace_s = t.elapsed().as_secs_f64();
+    // One sample: steal is read outside the phase function (callgrind counts what runs inside it), and only for
+    // long samples.
+    let take_sample = || {
+        let steal = (min_sample_s > 0.0).then(steal_ticks).flatten();
+        let t = Instant::now();
+        let (passes, output) =
+            setup.install(|| bvhlab_phase_trace(|| repeat(t, min_sample_s, || built.structure.run(&job, &strategy))));
+        let seconds = t.elapsed().as_secs_f64() / f64::from(passes);
+        let stolen = steal.and_then(|a| steal_ticks().map(|b| b.saturating_sub(a) as f64 * STAT_TICK_S));
+        (seconds, passes, stolen, output)
+    };
+    let (mut trace_s, mut trace_passes, mut steal_s, mut output) = take_sample();
+    for _ in 1..if min_sample_s > 0.0 { STEAL_ATTEMPTS } else { 1 } {
+        if steal_s.is_none_or(|s| s == 0.0) {
+            break;
+        }
+        let again = take_sample();
+        if again.2 <= steal_s {
+            (trace_s, trace_passes, steal_s, output) = again;
+        }
+    }
     let encode_s = match &output {
         Output::Image(image) => encode_seconds(image),
         Output::Answers(_) => 0.0,
@@ -206,8 +269,10 @@ pub fn timed(settings: &Settings, file: Option<&Scene>, rays: Option<&RaySet>, s
     let overhead_s = match (&output, rays) {
         (Output::Answers(_), Some(set)) => {
             let t = Instant::now();
-            std::hint::black_box(setup.install(|| trace::<_, NoCounters>(&Null, set, &settings.strategy())));
-            Some(t.elapsed().as_secs_f64())
+            for _ in 0..trace_passes {
+                std::hint::black_box(setup.install(|| trace::<_, NoCounters>(&Null, set, &settings.strategy())));
+            }
+            Some(t.elapsed().as_secs_f64() / f64::from(trace_passes))
         }
         _ => None,
     };
@@ -218,6 +283,8 @@ pub fn timed(settings: &Settings, file: Option<&Scene>, rays: Option<&RaySet>, s
         trace_s,
         overhead_s,
         encode_s,
+        trace_passes,
+        steal_s,
         output_hash,
         scene_fingerprint: scene.fingerprint(),
         stats: built.structure.stats(),
@@ -253,6 +320,25 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_sample_repeats_the_job_until_its_floor_and_at_least_once() {
+        let mut calls = 0;
+        let (passes, last) = repeat(Instant::now(), 0.0, || {
+            calls += 1;
+            calls
+        });
+        assert_eq!((passes, last), (1, 1), "no floor: one pass, as every earlier row");
+        let mut calls = 0;
+        let start = Instant::now();
+        let (passes, last) = repeat(start, 0.02, || {
+            std::thread::sleep(std::time::Duration::from_millis(5));
+            calls += 1;
+            calls
+        });
+        assert!(start.elapsed().as_secs_f64() >= 0.02 && passes >= 4, "{passes} passes");
+        assert_eq!(last, passes, "the last pass's output is kept");
+    }
+
+    #[test]
     fn timings_round_trip_through_json() {
         let t = Timing {
             setup_s: 0.0625,
@@ -261,6 +347,8 @@ mod tests {
             trace_s: 3.25,
             overhead_s: Some(0.002),
             encode_s: 0.0,
+            trace_passes: 3,
+            steal_s: Some(0.01),
             output_hash: 0xdead_beef_0123_4567,
             scene_fingerprint: 42,
             stats: TreeStats { nodes: 7, leaves: 4, depth: 2, bytes: 1024, sah_cost: 3.5 },

@@ -168,7 +168,11 @@ fn workload_rays(plan: &Plan, s: &Settings, bank: &mut RayBank) -> Option<std::s
 
 /// The worker request of a configuration.
 pub fn worker_request(plan: &Plan, c: &Configuration) -> WorkerRequest {
-    WorkerRequest { settings: c.settings.clone(), sphere_file: plan.sphere_file.as_ref().map(|f| f.path.clone()) }
+    WorkerRequest {
+        settings: c.settings.clone(),
+        sphere_file: plan.sphere_file.as_ref().map(|f| f.path.clone()),
+        sample_s: plan.sample_s,
+    }
 }
 
 fn check(plan: &Plan, c: &Configuration, bank: &mut RayBank) -> Result<Checked, Error> {
@@ -236,6 +240,8 @@ fn row(r: &Recording, c: &Configuration, rep: u32, t: &Timing, v: &Checked, star
     row.build_s = metric(t.build_s);
     row.trace_s = metric(t.trace_s);
     row.overhead_s = t.overhead_s.and_then(metric);
+    row.trace_passes = t.trace_passes;
+    row.steal_s = t.steal_s;
     row.encode_s = metric(t.encode_s);
     row.total_s = metric(t.total_s());
     row.rays = w.rays;

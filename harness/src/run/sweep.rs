@@ -121,7 +121,7 @@ impl ConfigurationState<'_> {
             Runner::Worker(worker) => worker.time(&worker_request(plan, c)),
             Runner::Here(setup) => {
                 let rays = workload_rays(plan, &c.settings, bank);
-                measure::timed(&c.settings, plan.scene_file(), rays.as_deref(), setup)
+                measure::timed(&c.settings, plan.scene_file(), rays.as_deref(), setup, plan.sample_s)
             }
         }
     }

@@ -26,6 +26,9 @@ pub struct WorkerRequest {
     pub settings: Settings,
     /// The sphere file of a `sphere-file` scene.
     pub sphere_file: Option<PathBuf>,
+    /// The shortest timed sample in seconds (0, and absent in earlier revisions' requests: one pass).
+    #[serde(default)]
+    pub sample_s: f64,
 }
 
 /// The JSON line of a request: today's settings, and beside them the ones earlier revisions named otherwise (a
@@ -69,7 +72,7 @@ impl Session {
 
     fn time(&self) -> Result<Timing, Error> {
         let scene = self.file.as_ref().map(|f| &*f.scene);
-        measure::timed(&self.request.settings, scene, self.rays.as_ref(), &self.setup)
+        measure::timed(&self.request.settings, scene, self.rays.as_ref(), &self.setup, self.request.sample_s)
     }
 }
 
@@ -182,8 +185,12 @@ mod tests {
     fn requests_carry_the_packet_size_earlier_revisions_declared() {
         let mut s = Settings::default().normalized();
         let line = |s: &Settings| {
-            let json: serde_json::Value =
-                serde_json::from_str(&request_line(&WorkerRequest { settings: s.clone(), sphere_file: None })).unwrap();
+            let json: serde_json::Value = serde_json::from_str(&request_line(&WorkerRequest {
+                settings: s.clone(),
+                sphere_file: None,
+                sample_s: 0.0,
+            }))
+            .unwrap();
             assert_eq!(
                 serde_json::from_value::<WorkerRequest>(json.clone()).unwrap().settings,
                 *s,
@@ -202,8 +209,11 @@ mod tests {
 
     #[test]
     fn requests_round_trip_through_json() {
-        let request =
-            WorkerRequest { settings: Settings::default().normalized(), sphere_file: Some("spheres.csv".into()) };
+        let request = WorkerRequest {
+            settings: Settings::default().normalized(),
+            sphere_file: Some("spheres.csv".into()),
+            sample_s: 0.0,
+        };
         let json = serde_json::to_string(&request).unwrap();
         assert!(json.contains("\"accel\":\"flat-bvh\""), "settings are spelled as in rows: {json}");
         assert_eq!(serde_json::from_str::<WorkerRequest>(&json).unwrap(), request);
@@ -227,7 +237,7 @@ mod tests {
                 workload: schema::Workload::Rays(tracer::rays::RayKind::Primary),
                 ..Settings::default()
             };
-            WorkerRequest { settings: s.normalized(), sphere_file: None }
+            WorkerRequest { settings: s.normalized(), sphere_file: None, sample_s: 0.0 }
         };
         let (a, b) = (settings(50), settings(60));
         let t = answers(&[&a, &a, &a, &b]);
