@@ -239,8 +239,8 @@ declare_columns! {
         /// metric in `repetition_rule`, over its repetitions up to this one (empty for the first).
         interval_width: Option<f64>, Metric, decimals 6, added 4;
         /// Passes of the job in the timed trace: with the experiment's `sample_ms`, the job is traced again until
-        /// the sample lasted that long, and every phase time per ray (`trace_s`, `overhead_s`, `mrays_per_s`) is
-        /// the mean per pass (1: one pass; 0 where validation failed).
+        /// the sample lasted that long; `trace_s` (and so `mrays_per_s`) is then the median pass, `overhead_s` the
+        /// mean (1: one pass; 0 where validation failed).
         trace_passes: u32, Provenance = 1, added 10;
         /// The hypervisor's steal time, summed over all CPUs, during the kept trace sample (`/proc/stat`, 10-ms
         /// ticks); a long sample (`sample_ms`) that saw steal is taken again, up to 3 times, keeping the one with the

@@ -122,6 +122,13 @@ impl Plan {
         };
 
         let mut configurations = Vec::new();
+        // Each configuration's point: its values on the axes no series fixes, numbered in order of first appearance
+        // (the series of one point are compared with each other, so the rounds run them back to back).
+        let fixed_somewhere: HashSet<usize> = series
+            .iter()
+            .flat_map(|s| Axis::ALL.iter().enumerate().filter(|(_, a)| s.fixed.contains_key(a)).map(|(i, _)| i))
+            .collect();
+        let (mut points, mut point_of): (Vec<Vec<AxisValue>>, Vec<usize>) = (Vec::new(), Vec::new());
         let mut seen = HashSet::new();
         let mut above_cores = Vec::new();
         for s in series {
@@ -149,6 +156,16 @@ impl Plan {
                     if threads > cores {
                         above_cores.push(threads);
                     }
+                    let point: Vec<AxisValue> = values
+                        .iter()
+                        .enumerate()
+                        .filter(|(i, _)| !fixed_somewhere.contains(i))
+                        .map(|(_, v)| v.clone())
+                        .collect();
+                    point_of.push(points.iter().position(|p| *p == point).unwrap_or_else(|| {
+                        points.push(point);
+                        points.len() - 1
+                    }));
                     configurations.push(Configuration {
                         id,
                         series: s.label.clone(),
@@ -184,7 +201,7 @@ impl Plan {
                 "Thread counts {above_cores:?} exceed the {cores} logical cores of this machine: those runs oversubscribe the CPU."
             ));
         }
-        let runs = order::runs(exp, configurations.len());
+        let runs = order::runs(exp, &point_of);
         Ok(Plan { configurations, runs, sphere_file, notes, shard: None, sample_s: exp.sample_s })
     }
 
@@ -371,7 +388,17 @@ mod tests {
         let text = |order: &str| format!("{BASE}order = \"{order}\"\n[sweep]\nobjects = [1, 2, 3]\n");
         let reps = |p: &Plan| p.runs.iter().filter_map(|r| r.repetition.map(|x| (r.config, x))).collect::<Vec<_>>();
         let inter = plan(&text("interleaved"));
-        assert_eq!(reps(&inter), vec![(0, 0), (1, 0), (2, 0), (0, 1), (1, 1), (2, 1)]);
+        // Every other round in reverse.
+        assert_eq!(reps(&inter), vec![(0, 0), (1, 0), (2, 0), (2, 1), (1, 1), (0, 1)]);
+        // Two series: a round runs them point by point, back to back, so that their per-round ratios compare
+        // neighbours in time (configurations 0..3 are series a, 3..6 series b).
+        let two = plan(&format!(
+            "{}[[series]]\nlabel = \"a\"\n[[series]]\nlabel = \"b\"\nleaf_size = 2\n",
+            text("interleaved")
+        ));
+        let round: Vec<(usize, u32)> = reps(&two).into_iter().take(12).collect();
+        let expected = [(0, 0), (3, 0), (1, 0), (4, 0), (2, 0), (5, 0), (5, 1), (2, 1), (4, 1), (1, 1), (3, 1), (0, 1)];
+        assert_eq!(round, expected);
         assert!(inter.runs[..3].iter().all(|r| r.repetition.is_none()), "warm-ups first");
         let seq = plan(&text("sequential"));
         assert_eq!(

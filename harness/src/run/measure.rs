@@ -71,16 +71,25 @@ fn steal_ticks() -> Option<u64> {
 /// Attempts of a timed trace when steal time was seen during it (the sample with the least steal is kept).
 const STEAL_ATTEMPTS: u32 = 3;
 
-/// Runs `run` until at least `min_s` seconds have passed since `start` (at least once); the passes and the last
-/// pass's output.
-fn repeat<T>(start: Instant, min_s: f64, mut run: impl FnMut() -> T) -> (u32, T) {
+/// Runs `run` until at least `min_s` seconds have passed since `start` (at least once); the passes, the last
+/// pass's output, and (when `min_s` is above 0) the median of the passes' own times.
+fn repeat<T>(start: Instant, min_s: f64, mut run: impl FnMut() -> T) -> (u32, T, Option<f64>) {
     let mut output = run();
-    let mut passes = 1u32;
-    while min_s > 0.0 && start.elapsed().as_secs_f64() < min_s {
-        output = run();
-        passes += 1;
+    if min_s <= 0.0 {
+        return (1, output, None);
     }
-    (passes, output)
+    let mut times = vec![start.elapsed().as_secs_f64()];
+    let mut last = start.elapsed().as_secs_f64();
+    while last < min_s {
+        output = run();
+        let now = start.elapsed().as_secs_f64();
+        times.push(now - last);
+        last = now;
+    }
+    times.sort_by(f64::total_cmp);
+    let n = times.len();
+    let median = if n % 2 == 1 { times[n / 2] } else { (times[n / 2 - 1] + times[n / 2]) / 2.0 };
+    (n as u32, output, Some(median))
 }
 
 impl Timing {
@@ -216,7 +225,7 @@ fn encode_seconds(image: &tracer::render::Image) -> f64 {
 
 /// Runs `settings` once with every phase timed (no counters), on what `setup` started. `rays` is the
 /// workload's ray set. Builds and traces run in the setup's pool. With `min_sample_s` above 0 the trace is one
-/// sample of at least that long (the job traced again until then; `trace_s` is the mean per pass), taken again, up
+/// sample of at least that long (the job traced again until then; `trace_s` is the median pass), taken again, up
 /// to [`STEAL_ATTEMPTS`] times, when the hypervisor stole time during it; 0 traces once, as every earlier row did.
 pub fn timed(
     settings: &Settings,
@@ -244,9 +253,9 @@ pub fn timed(
     let take_sample = || {
         let steal = (min_sample_s > 0.0).then(steal_ticks).flatten();
         let t = Instant::now();
-        let (passes, output) =
+        let (passes, output, median) =
             setup.install(|| bvhlab_phase_trace(|| repeat(t, min_sample_s, || built.structure.run(&job, &strategy))));
-        let seconds = t.elapsed().as_secs_f64() / f64::from(passes);
+        let seconds = median.unwrap_or_else(|| t.elapsed().as_secs_f64());
         let stolen = steal.and_then(|a| steal_ticks().map(|b| b.saturating_sub(a) as f64 * STAT_TICK_S));
         (seconds, passes, stolen, output)
     };
@@ -322,19 +331,20 @@ mod tests {
     #[test]
     fn a_sample_repeats_the_job_until_its_floor_and_at_least_once() {
         let mut calls = 0;
-        let (passes, last) = repeat(Instant::now(), 0.0, || {
+        let (passes, last, median) = repeat(Instant::now(), 0.0, || {
             calls += 1;
             calls
         });
-        assert_eq!((passes, last), (1, 1), "no floor: one pass, as every earlier row");
+        assert_eq!((passes, last, median), (1, 1, None), "no floor: one pass, timed as every earlier row");
         let mut calls = 0;
         let start = Instant::now();
-        let (passes, last) = repeat(start, 0.02, || {
+        let (passes, last, median) = repeat(start, 0.02, || {
             std::thread::sleep(std::time::Duration::from_millis(5));
             calls += 1;
             calls
         });
         assert!(start.elapsed().as_secs_f64() >= 0.02 && passes >= 4, "{passes} passes");
+        assert!(median.is_some_and(|m| m >= 0.005), "a pass sleeps 5 ms: {median:?}");
         assert_eq!(last, passes, "the last pass's output is kept");
     }
 
