@@ -33,7 +33,7 @@ pub struct Timing {
     #[serde(default)]
     pub overhead_s: Option<f64>,
     pub encode_s: f64,
-    /// Passes of the job in the timed trace (`trace_s` is their mean); 1 in answers of earlier workers.
+    /// Passes of the job in the timed trace (`trace_s` is the median pass); 1 in answers of earlier workers.
     #[serde(default = "one")]
     pub trace_passes: u32,
     /// The hypervisor's steal time over all CPUs during the kept trace sample (`/proc/stat`, 10-ms ticks);
@@ -86,10 +86,7 @@ fn repeat<T>(start: Instant, min_s: f64, mut run: impl FnMut() -> T) -> (u32, T,
         times.push(now - last);
         last = now;
     }
-    times.sort_by(f64::total_cmp);
-    let n = times.len();
-    let median = if n % 2 == 1 { times[n / 2] } else { (times[n / 2 - 1] + times[n / 2]) / 2.0 };
-    (n as u32, output, Some(median))
+    (times.len() as u32, output, Some(report::stats::median(&times)))
 }
 
 impl Timing {
