@@ -242,6 +242,10 @@ declare_columns! {
         /// the sample lasted that long; `trace_s` (and so `mrays_per_s`) is then the median pass, `overhead_s` the
         /// mean (1: one pass; 0 where validation failed).
         trace_passes: u32, Provenance = 1, added 10;
+        /// Configurations whose trace passes took turns in the timed sample, this one included: with `sample_ms`
+        /// and interleaved rounds, the series of one point are built together and traced a pass of each in turn,
+        /// so that a change in the machine's speed reaches all of them alike (1: sampled alone, as earlier rows).
+        sample_configs: u32, Provenance = 1, added 11;
         /// The hypervisor's steal time, summed over all CPUs, during the kept trace sample (`/proc/stat`, 10-ms
         /// ticks); a long sample (`sample_ms`) that saw steal is taken again, up to 3 times, keeping the one with the
         /// least. Empty for one-pass samples, where the kernel does not report it, and in earlier rows.

@@ -14,7 +14,7 @@ const TABLES: &str = "\
 | `repetitions` | 1..=1000, or `\"auto\"` with `min_repetitions`, `max_repetitions`, `target_ci_width` |
 | `warmups` | unrecorded runs of each configuration before its first repetition |
 | `order` | `interleaved` (default), `sequential` or `shuffled` (with `order_seed`) |
-| `sample_ms` | the shortest timed sample in ms, 0..=10000 (default 0: one pass): each timed run traces its job again until this long has passed and records the median pass (`trace_passes`); a long sample that saw hypervisor steal time is taken again (`steal_s`) |
+| `sample_ms` | the shortest timed sample in ms, 0..=10000 (default 0: one pass): each timed run traces its job again until this long has passed and records the median pass (`trace_passes`); with `order = \"interleaved\"` the series of one point are built together and traced a pass of each in turn (`sample_configs`); a long sample that saw hypervisor steal time is taken again (`steal_s`) |
 | `[sweep]` | any setting below, a value or a list; the runs are the cartesian product |
 | `[[series]]` | `label` and the settings it fixes; each series runs the sweep's product |
 | `[[exclude]]` | settings (and/or `series`) whose every match is skipped |

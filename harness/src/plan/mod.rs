@@ -35,6 +35,9 @@ pub struct Configuration {
     pub settings: Settings,
     /// The threads as configured (`all` stays `all`, as in the id and the row's `threads` column).
     pub threads: Threads,
+    /// Its point: its values on the axes no series fixes, numbered in order of first appearance. The series of
+    /// one point are compared with each other, so interleaved rounds run them together.
+    pub point: usize,
 }
 
 /// One execution: a configuration and its repetition index (`None` for a warm-up, which is not recorded).
@@ -171,6 +174,7 @@ impl Plan {
                         series: s.label.clone(),
                         settings,
                         threads: configured.threads,
+                        point: *point_of.last().expect("pushed above"),
                     });
                 }
             }

@@ -36,6 +36,10 @@ pub struct Timing {
     /// Passes of the job in the timed trace (`trace_s` is the median pass); 1 in answers of earlier workers.
     #[serde(default = "one")]
     pub trace_passes: u32,
+    /// Configurations whose passes took turns in the sample, this one included (1: it was sampled alone, as in
+    /// answers of earlier workers).
+    #[serde(default = "one")]
+    pub sample_configs: u32,
     /// The hypervisor's steal time over all CPUs during the kept trace sample (`/proc/stat`, 10-ms ticks);
     /// `None` where the kernel does not report it and in answers of earlier workers.
     #[serde(default)]
@@ -68,25 +72,153 @@ fn steal_ticks() -> Option<u64> {
     stat.lines().next()?.split_whitespace().nth(8)?.parse().ok()
 }
 
-/// Attempts of a timed trace when steal time was seen during it (the sample with the least steal is kept).
+/// Attempts of a timed sample when steal time was seen during it (the attempt with the least steal is kept).
 const STEAL_ATTEMPTS: u32 = 3;
 
-/// Runs `run` until at least `min_s` seconds have passed since `start` (at least once); the passes, the last
-/// pass's output, and (when `min_s` is above 0) the median of the passes' own times.
-fn repeat<T>(start: Instant, min_s: f64, mut run: impl FnMut() -> T) -> (u32, T, Option<f64>) {
-    let mut output = run();
-    if min_s <= 0.0 {
-        return (1, output, None);
+/// Something whose trace passes can be taken one at a time: a [`Trial`] in this process, or one in a worker.
+pub trait TakesPasses {
+    /// Takes one more pass of the trace: its seconds.
+    fn pass(&mut self) -> Result<f64, Error>;
+}
+
+/// One sample of every trial in `trials`, taken in turn: a pass of each, then again, until each trial's passes add
+/// up to `min_s` (at least one pass each, so 0 takes exactly one). With `min_s` above 0 the hypervisor's steal
+/// over the sample is read, and a sample that saw steal is taken again, up to [`STEAL_ATTEMPTS`] times, keeping
+/// the attempt with the least. Returns each trial's pass times and the steal of the kept attempt.
+pub fn sample(trials: &mut [&mut dyn TakesPasses], min_s: f64) -> Result<(Vec<Vec<f64>>, Option<f64>), Error> {
+    let mut attempt = || -> Result<(Vec<Vec<f64>>, Option<f64>), Error> {
+        let steal = (min_s > 0.0).then(steal_ticks).flatten();
+        let mut passes = vec![Vec::new(); trials.len()];
+        let mut sums = vec![0.0; trials.len()];
+        while sums.iter().zip(&passes).any(|(&sum, p)| p.is_empty() || sum < min_s) {
+            for (i, trial) in trials.iter_mut().enumerate() {
+                if passes[i].is_empty() || sums[i] < min_s {
+                    let seconds = trial.pass()?;
+                    passes[i].push(seconds);
+                    sums[i] += seconds;
+                }
+            }
+        }
+        let stolen = steal.and_then(|a| steal_ticks().map(|b| b.saturating_sub(a) as f64 * STAT_TICK_S));
+        Ok((passes, stolen))
+    };
+    let mut kept = attempt()?;
+    for _ in 1..if min_s > 0.0 { STEAL_ATTEMPTS } else { 1 } {
+        if kept.1.is_none_or(|s| s == 0.0) {
+            break;
+        }
+        let again = attempt()?;
+        if again.1 <= kept.1 {
+            kept = again;
+        }
     }
-    let mut times = vec![start.elapsed().as_secs_f64()];
-    let mut last = start.elapsed().as_secs_f64();
-    while last < min_s {
-        output = run();
-        let now = start.elapsed().as_secs_f64();
-        times.push(now - last);
-        last = now;
+    Ok(kept)
+}
+
+/// What a trial runs with: its settings, a sphere-file scene's spheres, its workload's rays, and its setup.
+#[derive(Clone, Copy)]
+pub struct Context<'a> {
+    pub settings: &'a Settings,
+    pub file: Option<&'a Scene>,
+    pub rays: Option<&'a RaySet>,
+    pub setup: &'a Setup,
+}
+
+/// One timed run under way: its scene made and its structure built (each phase timed), ready for the passes of
+/// its trace, which [`sample`] takes alone or in turn with other configurations' passes.
+pub struct Trial {
+    scene: SceneData,
+    built: crate::backend::Built,
+    scene_s: f64,
+    build_s: f64,
+    output: Option<Output>,
+}
+
+impl Trial {
+    /// Makes the scene and builds the structure, each timed. Builds run in the setup's pool.
+    pub fn prepare(cx: &Context) -> Result<Trial, Error> {
+        let t = Instant::now();
+        let scene = make_scene(cx.settings, cx.file);
+        let scene_s = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let backend = backend::of(cx.settings.accel);
+        let built = if backend.own_threads() {
+            backend.build(cx.settings, &scene.geometry(), cx.setup)? // on its own threads (Embree's TBB)
+        } else {
+            // The others build in the pool: the phase function runs there (installing from inside the pool again,
+            // as the backends' builds do, runs in place), where callgrind sees the building thread enter it.
+            cx.setup.install(|| bvhlab_phase_build(|| backend.build(cx.settings, &scene.geometry(), cx.setup)))?
+        };
+        let build_s = t.elapsed().as_secs_f64();
+        Ok(Trial { scene, built, scene_s, build_s, output: None })
     }
-    (times.len() as u32, output, Some(report::stats::median(&times)))
+
+    /// One pass of the trace in the setup's pool, timed; its output is kept.
+    pub fn pass(&mut self, cx: &Context) -> f64 {
+        let (job, strategy) = (self.scene.job(cx.settings, cx.rays), cx.settings.strategy());
+        let t = Instant::now();
+        let output = cx.setup.install(|| bvhlab_phase_trace(|| self.built.structure.run(&job, &strategy)));
+        let seconds = t.elapsed().as_secs_f64();
+        self.output = Some(output);
+        seconds
+    }
+
+    /// The run's timing from the passes [`sample`] kept (`trace_s` their median, so one pass's own time) and the
+    /// steal it saw, then the last pass's image encoded and the harness's own cost measured.
+    pub fn finish(self, cx: &Context, passes: &[f64], steal_s: Option<f64>, sample_configs: u32) -> Timing {
+        let output = self.output.expect("a trial is finished after its passes");
+        let encode_s = match &output {
+            Output::Image(image) => encode_seconds(image),
+            Output::Answers(_) => 0.0,
+        };
+        let trace_passes = passes.len() as u32;
+        // The harness's own cost: the `null` backend over the same rays, strategy and pool (ray sets only).
+        let overhead_s = match (&output, cx.rays) {
+            (Output::Answers(_), Some(set)) => {
+                let t = Instant::now();
+                for _ in 0..trace_passes {
+                    std::hint::black_box(
+                        cx.setup.install(|| trace::<_, NoCounters>(&Null, set, &cx.settings.strategy())),
+                    );
+                }
+                Some(t.elapsed().as_secs_f64() / f64::from(trace_passes))
+            }
+            _ => None,
+        };
+        Timing {
+            setup_s: cx.setup.setup_s,
+            scene_s: self.scene_s,
+            build_s: self.build_s,
+            trace_s: report::stats::median(passes),
+            overhead_s,
+            encode_s,
+            trace_passes,
+            sample_configs,
+            steal_s,
+            output_hash: output.hash(),
+            scene_fingerprint: self.scene.fingerprint(),
+            stats: self.built.structure.stats(),
+            peer_info: self.built.peer_info,
+            simd_kernel: self.built.simd_kernel.to_string(),
+        }
+    }
+
+    /// This trial with what it runs with, as [`sample`] takes it.
+    pub fn with<'a>(&'a mut self, cx: Context<'a>) -> InContext<'a> {
+        InContext { trial: self, cx }
+    }
+}
+
+/// A trial and what it runs with.
+pub struct InContext<'a> {
+    trial: &'a mut Trial,
+    cx: Context<'a>,
+}
+
+impl TakesPasses for InContext<'_> {
+    fn pass(&mut self) -> Result<f64, Error> {
+        Ok(self.trial.pass(&self.cx))
+    }
 }
 
 impl Timing {
@@ -101,6 +233,7 @@ impl Timing {
             overhead_s: None,
             encode_s: nan,
             trace_passes: 0,
+            sample_configs: 0,
             steal_s: None,
             output_hash,
             scene_fingerprint: 0,
@@ -220,10 +353,9 @@ fn encode_seconds(image: &tracer::render::Image) -> f64 {
     t.elapsed().as_secs_f64()
 }
 
-/// Runs `settings` once with every phase timed (no counters), on what `setup` started. `rays` is the
-/// workload's ray set. Builds and traces run in the setup's pool. With `min_sample_s` above 0 the trace is one
-/// sample of at least that long (the job traced again until then; `trace_s` is the median pass), taken again, up
-/// to [`STEAL_ATTEMPTS`] times, when the hypervisor stole time during it; 0 traces once, as every earlier row did.
+/// Runs `settings` once with every phase timed (no counters), on what `setup` started, alone. `rays` is the
+/// workload's ray set. With `min_sample_s` above 0 the trace is one [`sample`] of at least that long (`trace_s`
+/// the median pass); 0 traces once, as every earlier row did.
 pub fn timed(
     settings: &Settings,
     file: Option<&Scene>,
@@ -231,72 +363,10 @@ pub fn timed(
     setup: &Setup,
     min_sample_s: f64,
 ) -> Result<Timing, Error> {
-    let t = Instant::now();
-    let scene = make_scene(settings, file);
-    let scene_s = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let backend = backend::of(settings.accel);
-    let built = if backend.own_threads() {
-        backend.build(settings, &scene.geometry(), setup)? // on its own threads (Embree's TBB)
-    } else {
-        // The others build in the pool: the phase function runs there (installing from inside the pool again, as
-        // the backends' builds do, runs in place), where callgrind sees the building thread enter it.
-        setup.install(|| bvhlab_phase_build(|| backend.build(settings, &scene.geometry(), setup)))?
-    };
-    let build_s = t.elapsed().as_secs_f64();
-    let (job, strategy) = (scene.job(settings, rays), settings.strategy());
-    // One sample: steal is read outside the phase function (callgrind counts what runs inside it), and only for
-    // long samples.
-    let take_sample = || {
-        let steal = (min_sample_s > 0.0).then(steal_ticks).flatten();
-        let t = Instant::now();
-        let (passes, output, median) =
-            setup.install(|| bvhlab_phase_trace(|| repeat(t, min_sample_s, || built.structure.run(&job, &strategy))));
-        let seconds = median.unwrap_or_else(|| t.elapsed().as_secs_f64());
-        let stolen = steal.and_then(|a| steal_ticks().map(|b| b.saturating_sub(a) as f64 * STAT_TICK_S));
-        (seconds, passes, stolen, output)
-    };
-    let (mut trace_s, mut trace_passes, mut steal_s, mut output) = take_sample();
-    for _ in 1..if min_sample_s > 0.0 { STEAL_ATTEMPTS } else { 1 } {
-        if steal_s.is_none_or(|s| s == 0.0) {
-            break;
-        }
-        let again = take_sample();
-        if again.2 <= steal_s {
-            (trace_s, trace_passes, steal_s, output) = again;
-        }
-    }
-    let encode_s = match &output {
-        Output::Image(image) => encode_seconds(image),
-        Output::Answers(_) => 0.0,
-    };
-    let output_hash = output.hash();
-    // The harness's own cost: the `null` backend over the same rays, strategy and pool (ray sets only).
-    let overhead_s = match (&output, rays) {
-        (Output::Answers(_), Some(set)) => {
-            let t = Instant::now();
-            for _ in 0..trace_passes {
-                std::hint::black_box(setup.install(|| trace::<_, NoCounters>(&Null, set, &settings.strategy())));
-            }
-            Some(t.elapsed().as_secs_f64() / f64::from(trace_passes))
-        }
-        _ => None,
-    };
-    Ok(Timing {
-        setup_s: setup.setup_s,
-        scene_s,
-        build_s,
-        trace_s,
-        overhead_s,
-        encode_s,
-        trace_passes,
-        steal_s,
-        output_hash,
-        scene_fingerprint: scene.fingerprint(),
-        stats: built.structure.stats(),
-        peer_info: built.peer_info,
-        simd_kernel: built.simd_kernel.to_string(),
-    })
+    let cx = Context { settings, file, rays, setup };
+    let mut trial = Trial::prepare(&cx)?;
+    let (passes, steal_s) = sample(&mut [&mut trial.with(cx)], min_sample_s)?;
+    Ok(trial.finish(&cx, &passes[0], steal_s, 1))
 }
 
 /// Runs `settings` once with work counters (untimed): counters, output hash, and (when asked for) the answers to
@@ -325,24 +395,39 @@ pub fn counted(
 mod tests {
     use super::*;
 
+    /// A trial whose passes take `ms` milliseconds each, logging its name in `log` per pass.
+    struct Sleeper<'a> {
+        name: char,
+        ms: u64,
+        log: &'a std::cell::RefCell<String>,
+    }
+
+    impl TakesPasses for Sleeper<'_> {
+        fn pass(&mut self) -> Result<f64, Error> {
+            self.log.borrow_mut().push(self.name);
+            let t = Instant::now();
+            std::thread::sleep(std::time::Duration::from_millis(self.ms));
+            Ok(t.elapsed().as_secs_f64())
+        }
+    }
+
     #[test]
-    fn a_sample_repeats_the_job_until_its_floor_and_at_least_once() {
-        let mut calls = 0;
-        let (passes, last, median) = repeat(Instant::now(), 0.0, || {
-            calls += 1;
-            calls
-        });
-        assert_eq!((passes, last, median), (1, 1, None), "no floor: one pass, timed as every earlier row");
-        let mut calls = 0;
-        let start = Instant::now();
-        let (passes, last, median) = repeat(start, 0.02, || {
-            std::thread::sleep(std::time::Duration::from_millis(5));
-            calls += 1;
-            calls
-        });
-        assert!(start.elapsed().as_secs_f64() >= 0.02 && passes >= 4, "{passes} passes");
-        assert!(median.is_some_and(|m| m >= 0.005), "a pass sleeps 5 ms: {median:?}");
-        assert_eq!(last, passes, "the last pass's output is kept");
+    fn a_sample_takes_passes_in_turn_until_each_trial_reaches_its_floor() {
+        let log = std::cell::RefCell::new(String::new());
+        let (mut a, mut b) = (Sleeper { name: 'a', ms: 5, log: &log }, Sleeper { name: 'b', ms: 2, log: &log });
+        let (passes, steal) = sample(&mut [&mut a, &mut b], 0.0).unwrap();
+        assert_eq!((passes.iter().map(Vec::len).collect::<Vec<_>>(), steal), (vec![1, 1], None), "no floor: one pass");
+        assert_eq!(*log.borrow(), "ab");
+        log.borrow_mut().clear();
+        let (passes, _) = sample(&mut [&mut a, &mut b], 0.02).unwrap();
+        for (p, name) in passes.iter().zip(["a", "b"]) {
+            assert!(p.iter().sum::<f64>() >= 0.02, "{name}: {p:?}");
+            assert!(p.iter().sum::<f64>() - p.last().unwrap() < 0.02, "{name} stops once past the floor: {p:?}");
+        }
+        let log = log.borrow();
+        let turns = passes[0].len().min(passes[1].len());
+        assert!(log.starts_with(&"ab".repeat(turns)), "in turn while both sample: {log}");
+        assert!(log[2 * turns..].chars().all(|c| c == 'b'), "then the one with shorter passes alone: {log}");
     }
 
     #[test]
@@ -355,6 +440,7 @@ mod tests {
             overhead_s: Some(0.002),
             encode_s: 0.0,
             trace_passes: 3,
+            sample_configs: 2,
             steal_s: Some(0.01),
             output_hash: 0xdead_beef_0123_4567,
             scene_fingerprint: 42,

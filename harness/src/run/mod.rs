@@ -172,6 +172,7 @@ pub fn worker_request(plan: &Plan, c: &Configuration) -> WorkerRequest {
         settings: c.settings.clone(),
         sphere_file: plan.sphere_file.as_ref().map(|f| f.path.clone()),
         sample_s: plan.sample_s,
+        step: worker::Step::Whole,
     }
 }
 
@@ -211,6 +212,7 @@ struct Recording<'a> {
 }
 
 /// When a run started: the 1-minute load average just before it and its RFC 3339 time.
+#[derive(Clone)]
 struct Started {
     load: f64,
     timestamp: String,
@@ -241,6 +243,7 @@ fn row(r: &Recording, c: &Configuration, rep: u32, t: &Timing, v: &Checked, star
     row.trace_s = metric(t.trace_s);
     row.overhead_s = t.overhead_s.and_then(metric);
     row.trace_passes = t.trace_passes;
+    row.sample_configs = t.sample_configs;
     row.steal_s = t.steal_s;
     row.encode_s = metric(t.encode_s);
     row.total_s = metric(t.total_s());
@@ -331,63 +334,90 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, existing: Existing) -> R
     let mut progress = Progress::new(model);
     progress.update(|config| sweep.expected(config));
     let mut bank = RayBank::default();
-    for run in todo {
-        let c = &plan.configurations[run.config];
-        let (metric, rule) = (sweep.metric(c), sweep.rule(c));
-        let state = &mut sweep.states[run.config];
-        if state.failed || sweep.sampler.is_done(run.config) {
-            continue;
+    // With `sample_ms`, an interleaved round's series of one point are sampled together, a pass of each in turn.
+    let together = plan.sample_s > 0.0 && exp.order == crate::config::RunOrder::Interleaved;
+    let mut todo = todo.into_iter().peekable();
+    while let Some(first) = todo.next() {
+        let mut group = vec![first];
+        while let Some(next) = todo.peek().filter(|_| together)
+            && plan.configurations[next.config].point == plan.configurations[first.config].point
+            && next.repetition == first.repetition
+        {
+            group.push(*next);
+            todo.next();
         }
-        if state.checked.is_none() {
-            let started = std::time::Instant::now();
-            let v = check(plan, c, &mut bank)?;
-            progress.validated(run.config, started.elapsed().as_secs_f64());
-            if v.status == ValidationStatus::Failed {
-                note!("{}", v.failure(&describe(c)));
-                let mut failed = row(&recording, c, 0, &Timing::untimed(v.output_hash), &v, Started::now());
-                failed.repetition_rule = rule;
-                append(&failed)?;
-                state.fail();
-                progress.untimed(&format!("{} FAILED validation", describe(c)));
-                progress.update(|config| sweep.expected(config));
+        // Each is validated (and counted) before its first timed run; one that fails is recorded and never timed.
+        let mut ready = Vec::new();
+        for run in group {
+            let c = &plan.configurations[run.config];
+            let rule = sweep.rule(c);
+            let state = &mut sweep.states[run.config];
+            if state.failed || sweep.sampler.is_done(run.config) {
                 continue;
             }
-            state.checked = Some(v);
+            if state.checked.is_none() {
+                let started = std::time::Instant::now();
+                let v = check(plan, c, &mut bank)?;
+                progress.validated(run.config, started.elapsed().as_secs_f64());
+                if v.status == ValidationStatus::Failed {
+                    note!("{}", v.failure(&describe(c)));
+                    let mut failed = row(&recording, c, 0, &Timing::untimed(v.output_hash), &v, Started::now());
+                    failed.repetition_rule = rule;
+                    append(&failed)?;
+                    state.fail();
+                    progress.untimed(&format!("{} FAILED validation", describe(c)));
+                    progress.update(|config| sweep.expected(config));
+                    continue;
+                }
+                state.checked = Some(v);
+            }
+            ready.push(*run);
+        }
+        if ready.is_empty() {
+            continue;
         }
         let started_run = Started::now();
         let started = std::time::Instant::now();
-        let timing = state.time(plan, &mut bank)?;
-        state.pending.take(run);
-        let what = match run.repetition {
-            None => format!("{} warm-up", describe(c)),
-            Some(rep) => {
-                let v = state.checked.clone().expect("checked before its first run");
-                if v.output_hash != timing.output_hash {
-                    return Err(Error::Run(format!(
-                        "{}: the counted pass produced output {:016x} but the timed pass {:016x}: the tracer is not deterministic",
-                        describe(c),
-                        v.output_hash,
-                        timing.output_hash
-                    )));
+        let configs: Vec<usize> = ready.iter().map(|r| r.config).collect();
+        let timings = sweep.time(&configs, plan, &mut bank)?;
+        let seconds = started.elapsed().as_secs_f64() / ready.len() as f64;
+        for (run, timing) in ready.iter().zip(timings) {
+            let c = &plan.configurations[run.config];
+            let (metric, rule) = (sweep.metric(c), sweep.rule(c));
+            let state = &mut sweep.states[run.config];
+            state.pending.take(run);
+            let what = match run.repetition {
+                None => format!("{} warm-up", describe(c)),
+                Some(rep) => {
+                    let v = state.checked.clone().expect("checked before its first run");
+                    if v.output_hash != timing.output_hash {
+                        return Err(Error::Run(format!(
+                            "{}: the counted pass produced output {:016x} but the timed pass {:016x}: the tracer is not deterministic",
+                            describe(c),
+                            v.output_hash,
+                            timing.output_hash
+                        )));
+                    }
+                    let mut recorded = row(&recording, c, rep, &timing, &v, started_run.clone());
+                    recorded.repetition_rule = rule;
+                    recorded.interval_width =
+                        sweep.sampler.record(run.config, &c.id, adaptive::timed_value(&timing, metric));
+                    // Rounding is idempotent: the rest of the row was rounded by `row` already.
+                    let recorded = recorded.rounded();
+                    append(&recorded)?;
+                    let width =
+                        recorded.interval_width.map_or(String::new(), |w| format!(" (interval ±{:.1}%)", w * 50.0));
+                    format!("{} rep {rep}: {:.3} s{width}", describe(c), timing.total_s())
                 }
-                let mut recorded = row(&recording, c, rep, &timing, &v, started_run);
-                recorded.repetition_rule = rule;
-                recorded.interval_width =
-                    sweep.sampler.record(run.config, &c.id, adaptive::timed_value(&timing, metric));
-                // Rounding is idempotent: the rest of the row was rounded by `row` already.
-                let recorded = recorded.rounded();
-                append(&recorded)?;
-                let width = recorded.interval_width.map_or(String::new(), |w| format!(" (interval ±{:.1}%)", w * 50.0));
-                format!("{} rep {rep}: {:.3} s{width}", describe(c), timing.total_s())
+            };
+            // After a configuration's last run its worker process, pool and device go.
+            let state = &mut sweep.states[run.config];
+            if state.pending.is_empty() || sweep.sampler.is_done(run.config) {
+                state.finish();
             }
-        };
-        // After a configuration's last run its worker process, pool and device go.
-        let state = &mut sweep.states[run.config];
-        if state.pending.is_empty() || sweep.sampler.is_done(run.config) {
-            state.finish();
+            progress.finished(run.config, seconds, &what);
+            progress.update(|config| sweep.expected(config));
         }
-        progress.finished(run.config, started.elapsed().as_secs_f64(), &what);
-        progress.update(|config| sweep.expected(config));
     }
     progress.finish();
     Ok(())

@@ -4,9 +4,9 @@
 use schema::Row;
 
 use super::adaptive::{self, Sampler};
-use super::measure::{self, Timing};
+use super::measure::{self, Context, TakesPasses, Timing, Trial};
 use super::validate::RayBank;
-use super::worker::Worker;
+use super::worker::{Step, Worker, WorkerRequest};
 use super::{Checked, worker_request, workload_rays};
 use crate::backend::{self, Setup};
 use crate::config::Experiment;
@@ -104,26 +104,85 @@ impl<'a> Sweep<'a> {
     }
 }
 
+impl<'a> Sweep<'a> {
+    /// Times one run of each of `configs`, starting their runners on their first. One configuration is timed
+    /// alone; several (the series of one point in an interleaved round with `sample_ms`) are built one after the
+    /// other and then sampled together, a pass of each in turn ([`measure::sample`]).
+    pub fn time(&mut self, configs: &[usize], plan: &Plan, bank: &mut RayBank) -> Result<Vec<Timing>, Error> {
+        let rays: Vec<_> =
+            configs.iter().map(|&i| workload_rays(plan, &self.states[i].configuration.settings, bank)).collect();
+        let mut picked: Vec<(usize, &mut ConfigurationState<'a>)> =
+            self.states.iter_mut().enumerate().filter(|(i, _)| configs.contains(i)).collect();
+        picked.sort_by_key(|(i, _)| configs.iter().position(|c| c == i));
+        if let [(_, state)] = picked.as_mut_slice() {
+            let c = state.configuration;
+            return Ok(vec![match state.runner()? {
+                Runner::Worker(worker) => worker.time(&worker_request(plan, c))?,
+                Runner::Here(setup) => {
+                    measure::timed(&c.settings, plan.scene_file(), rays[0].as_deref(), setup, plan.sample_s)?
+                }
+            }]);
+        }
+        let mut turns = Vec::new();
+        for ((_, state), rays) in picked.iter_mut().zip(&rays) {
+            let c = state.configuration;
+            turns.push(match state.runner()? {
+                Runner::Worker(worker) => {
+                    let request = worker_request(plan, c);
+                    worker.step::<()>(&request, Step::Prepare)?;
+                    Turn::Worker { worker, request }
+                }
+                Runner::Here(setup) => {
+                    let cx = Context { settings: &c.settings, file: plan.scene_file(), rays: rays.as_deref(), setup };
+                    Turn::Here { trial: Trial::prepare(&cx)?, cx }
+                }
+            });
+        }
+        let mut takers: Vec<&mut dyn TakesPasses> = turns.iter_mut().map(|t| t as &mut dyn TakesPasses).collect();
+        let (passes, steal_s) = measure::sample(&mut takers, plan.sample_s)?;
+        let n = turns.len() as u32;
+        turns.into_iter().zip(passes).map(|(turn, passes)| turn.finish(passes, steal_s, n)).collect()
+    }
+}
+
+/// A configuration's run whose passes take turns with others': a trial in this process, or one in its worker.
+enum Turn<'a> {
+    Here { trial: Trial, cx: Context<'a> },
+    Worker { worker: &'a mut Worker, request: WorkerRequest },
+}
+
+impl TakesPasses for Turn<'_> {
+    fn pass(&mut self) -> Result<f64, Error> {
+        match self {
+            Turn::Here { trial, cx } => Ok(trial.pass(cx)),
+            Turn::Worker { worker, request } => worker.step(request, Step::Pass),
+        }
+    }
+}
+
+impl Turn<'_> {
+    /// The run's timing from the passes the sample kept.
+    fn finish(self, passes: Vec<f64>, steal_s: Option<f64>, sample_configs: u32) -> Result<Timing, Error> {
+        match self {
+            Turn::Here { trial, cx } => Ok(trial.finish(&cx, &passes, steal_s, sample_configs)),
+            Turn::Worker { worker, request } => worker.step(&request, Step::Finish { passes, steal_s, sample_configs }),
+        }
+    }
+}
+
 impl ConfigurationState<'_> {
-    /// Times one run, starting its runner on its first.
-    pub fn time(&mut self, plan: &Plan, bank: &mut RayBank) -> Result<Timing, Error> {
-        let c = self.configuration;
+    /// Where it is timed, started on its first timed run.
+    fn runner(&mut self) -> Result<&mut Runner, Error> {
         if self.runner.is_none() {
-            self.runner = Some(if backend::of(c.settings.accel).own_threads() {
+            self.runner = Some(if backend::of(self.configuration.settings.accel).own_threads() {
                 let exe = std::env::current_exe()
                     .map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
                 Runner::Worker(Worker::start(&exe, None)?)
             } else {
-                Runner::Here(Setup::start(&c.settings)?)
+                Runner::Here(Setup::start(&self.configuration.settings)?)
             });
         }
-        match self.runner.as_mut().expect("started above") {
-            Runner::Worker(worker) => worker.time(&worker_request(plan, c)),
-            Runner::Here(setup) => {
-                let rays = workload_rays(plan, &c.settings, bank);
-                measure::timed(&c.settings, plan.scene_file(), rays.as_deref(), setup, plan.sample_s)
-            }
-        }
+        Ok(self.runner.as_mut().expect("started above"))
     }
 
     /// Marks it failed and lets its runs go.

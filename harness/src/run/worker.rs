@@ -4,7 +4,9 @@
 //! its stdout. A worker serves one configuration at a time like the harness itself does: the first request
 //! starts the backend ([`Setup`], reported as `setup_s`) and makes the ray set, and every request after it
 //! with the same settings is one more warm run in the same process (the sweep keeps one worker per
-//! configuration for its warm-ups and all its repetitions). A worker that fails prints why on stderr and exits.
+//! configuration for its warm-ups and all its repetitions). A request may also be one step of a run whose passes
+//! take turns with other configurations' ([`Step`]): prepare (answered `null`), a pass (answered with its
+//! seconds), finish (answered with the [`Timing`]). A worker that fails prints why on stderr and exits.
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
@@ -29,6 +31,30 @@ pub struct WorkerRequest {
     /// The shortest timed sample in seconds (0, and absent in earlier revisions' requests: one pass).
     #[serde(default)]
     pub sample_s: f64,
+    /// Which part of a timed run this request asks for (absent: all of it).
+    #[serde(default, skip_serializing_if = "Step::is_whole")]
+    pub step: Step,
+}
+
+/// A part of a timed run, for runs whose passes take turns with other configurations' ([`measure::sample`]).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Step {
+    /// The whole run: prepare, one sample, finish (what earlier revisions' workers do with every request).
+    #[default]
+    Whole,
+    /// Make the scene and build the structure.
+    Prepare,
+    /// One pass of the trace.
+    Pass,
+    /// The timing from the passes the sample kept.
+    Finish { passes: Vec<f64>, steal_s: Option<f64>, sample_configs: u32 },
+}
+
+impl Step {
+    fn is_whole(&self) -> bool {
+        *self == Step::Whole
+    }
 }
 
 /// The JSON line of a request: today's settings, and beside them the ones earlier revisions named otherwise (a
@@ -52,6 +78,8 @@ struct Session {
     setup: Setup,
     file: Option<SphereFile>,
     rays: Option<RaySet>,
+    /// The run under way, between its `Prepare` and its `Finish`.
+    trial: Option<measure::Trial>,
 }
 
 impl Session {
@@ -67,12 +95,33 @@ impl Session {
             schema::Workload::Rays(k) => Some(super::validate::generate(k, &measure::make_scene(s, scene), s.seed)),
             schema::Workload::Render => None,
         };
-        Ok(Session { request: request.clone(), setup, file, rays })
+        Ok(Session { request: request.clone(), setup, file, rays, trial: None })
     }
 
-    fn time(&self) -> Result<Timing, Error> {
-        let scene = self.file.as_ref().map(|f| &*f.scene);
-        measure::timed(&self.request.settings, scene, self.rays.as_ref(), &self.setup, self.request.sample_s)
+    /// Answers `step` of a run: the JSON of what it gives.
+    fn answer(&mut self, step: Step) -> Result<String, Error> {
+        let cx = measure::Context {
+            settings: &self.request.settings,
+            file: self.file.as_ref().map(|f| &*f.scene),
+            rays: self.rays.as_ref(),
+            setup: &self.setup,
+        };
+        let out_of_order = || Error::Input("stdin: a pass or finish request before its prepare".into());
+        Ok(match step {
+            Step::Whole => {
+                let timing = measure::timed(cx.settings, cx.file, cx.rays, cx.setup, self.request.sample_s)?;
+                serde_json::to_string(&timing).expect("timings serialize")
+            }
+            Step::Prepare => {
+                self.trial = Some(measure::Trial::prepare(&cx)?);
+                "null".into()
+            }
+            Step::Pass => self.trial.as_mut().ok_or_else(out_of_order)?.pass(&cx).to_string(),
+            Step::Finish { passes, steal_s, sample_configs } => {
+                let trial = self.trial.take().ok_or_else(out_of_order)?;
+                serde_json::to_string(&trial.finish(&cx, &passes, steal_s, sample_configs)).expect("timings serialize")
+            }
+        })
     }
 }
 
@@ -84,14 +133,14 @@ pub fn serve(input: impl BufRead, mut output: impl Write) -> Result<(), Error> {
         if line.trim().is_empty() {
             continue;
         }
-        let request: WorkerRequest =
+        let mut request: WorkerRequest =
             serde_json::from_str(&line).map_err(|e| Error::Input(format!("stdin: not a worker request: {e}")))?;
+        let step = std::mem::take(&mut request.step);
         if session.as_ref().is_none_or(|s| s.request != request) {
             drop(session.take()); // the old configuration's pool and device go before the new ones start
             session = Some(Session::start(&request)?);
         }
-        let timing = session.as_ref().expect("started above").time()?;
-        let json = serde_json::to_string(&timing).expect("timings serialize");
+        let json = session.as_mut().expect("started above").answer(step)?;
         writeln!(output, "{json}").and_then(|()| output.flush()).map_err(|e| Error::Run(format!("stdout: {e}")))?;
     }
     Ok(())
@@ -126,6 +175,12 @@ impl Worker {
         self.receive()
     }
 
+    /// Asks for `step` of a run of `request` (a run whose passes take turns with others'): its answer.
+    pub fn step<T: serde::de::DeserializeOwned>(&mut self, request: &WorkerRequest, step: Step) -> Result<T, Error> {
+        self.send(&WorkerRequest { step, ..request.clone() });
+        self.receive()
+    }
+
     fn send(&mut self, request: &WorkerRequest) {
         let json = request_line(request);
         if let Some(stdin) = self.stdin.as_mut()
@@ -135,10 +190,10 @@ impl Worker {
         }
     }
 
-    fn receive(&mut self) -> Result<Timing, Error> {
+    fn receive<T: serde::de::DeserializeOwned>(&mut self) -> Result<T, Error> {
         let mut answer = String::new();
         if self.stdout.read_line(&mut answer).is_ok()
-            && let Ok(t) = serde_json::from_str::<Timing>(answer.trim())
+            && let Ok(t) = serde_json::from_str::<T>(answer.trim())
         {
             return Ok(t);
         }
@@ -189,6 +244,7 @@ mod tests {
                 settings: s.clone(),
                 sphere_file: None,
                 sample_s: 0.0,
+                step: Step::Whole,
             }))
             .unwrap();
             assert_eq!(
@@ -213,6 +269,7 @@ mod tests {
             settings: Settings::default().normalized(),
             sphere_file: Some("spheres.csv".into()),
             sample_s: 0.0,
+            step: Step::Whole,
         };
         let json = serde_json::to_string(&request).unwrap();
         assert!(json.contains("\"accel\":\"flat-bvh\""), "settings are spelled as in rows: {json}");
@@ -237,7 +294,7 @@ mod tests {
                 workload: schema::Workload::Rays(tracer::rays::RayKind::Primary),
                 ..Settings::default()
             };
-            WorkerRequest { settings: s.normalized(), sphere_file: None, sample_s: 0.0 }
+            WorkerRequest { settings: s.normalized(), sphere_file: None, sample_s: 0.0, step: Step::Whole }
         };
         let (a, b) = (settings(50), settings(60));
         let t = answers(&[&a, &a, &a, &b]);
@@ -246,5 +303,34 @@ mod tests {
         assert!(t[..3].iter().all(|x| x.setup_s == t[0].setup_s && x.output_hash == t[0].output_hash), "{t:?}");
         assert_ne!(t[3].output_hash, t[0].output_hash, "another configuration, another scene");
         assert_ne!(t[3].setup_s, t[0].setup_s, "another configuration starts its own setup");
+    }
+
+    #[test]
+    fn a_run_taken_in_steps_answers_as_a_whole_run_does() {
+        let s = Settings {
+            objects: 50,
+            width: 16,
+            height: 12,
+            workload: schema::Workload::Rays(tracer::rays::RayKind::Primary),
+            ..Settings::default()
+        };
+        let whole = WorkerRequest { settings: s.normalized(), sphere_file: None, sample_s: 0.0, step: Step::Whole };
+        let step = |step| serde_json::to_string(&WorkerRequest { step, ..whole.clone() }).unwrap() + "\n";
+        let finish = Step::Finish { passes: vec![0.003, 0.001, 0.002], steal_s: Some(0.0), sample_configs: 2 };
+        let input = [step(Step::Whole), step(Step::Prepare), step(Step::Pass), step(Step::Pass), step(finish)].concat();
+        let mut out = Vec::new();
+        serve(input.as_bytes(), &mut out).unwrap();
+        let lines: Vec<String> = String::from_utf8(out).unwrap().lines().map(str::to_string).collect();
+        assert_eq!(lines.len(), 5, "{lines:?}");
+        assert_eq!(lines[1], "null", "prepare");
+        assert!(lines[2..4].iter().all(|l| l.parse::<f64>().is_ok_and(|s| s > 0.0)), "passes: {lines:?}");
+        let (alone, stepped): (Timing, Timing) =
+            (serde_json::from_str(&lines[0]).unwrap(), serde_json::from_str(&lines[4]).unwrap());
+        assert_eq!(stepped.output_hash, alone.output_hash, "the same answers");
+        assert_eq!(stepped.setup_s, alone.setup_s, "in the same session");
+        assert_eq!((stepped.trace_s, stepped.trace_passes, stepped.sample_configs), (0.002, 3, 2), "the kept passes");
+        assert_eq!((alone.trace_passes, alone.sample_configs), (1, 1));
+        let early = [step(Step::Pass)].concat();
+        assert!(serve(early.as_bytes(), &mut Vec::new()).is_err(), "a pass before its prepare is refused");
     }
 }

@@ -323,6 +323,36 @@ fn validate_prints_runs_and_an_estimate() {
 }
 
 #[test]
+fn with_sample_ms_the_series_of_one_point_are_sampled_together() {
+    let dir = temp("together");
+    let cfg = dir.join("together.toml");
+    let text = |order: &str| {
+        format!(
+            "name = \"together\"\nrepetitions = 2\nwarmups = 1\nsample_ms = 5\norder = \"{order}\"\n[sweep]\n\
+             objects = [300, 400]\nwidth = 32\nheight = 24\nworkload = \"primary\"\n\
+             [[series]]\nlabel = \"a\"\n[[series]]\nlabel = \"b\"\n"
+        )
+    };
+    for (order, configs) in [("interleaved", "2"), ("sequential", "1")] {
+        std::fs::write(&cfg, text(order)).unwrap();
+        let out = dir.join(order);
+        let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        let text = std::fs::read_to_string(out.join("runs.csv")).unwrap();
+        let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+        let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+        let rows: Vec<Vec<&str>> = text.lines().skip(1).map(|l| l.split(',').collect()).collect();
+        assert_eq!(rows.len(), 8, "2 series x 2 object counts x 2 repetitions");
+        for row in &rows {
+            assert_eq!(row[column("sample_configs")], configs, "{order}: {row:?}");
+            let passes: u32 = row[column("trace_passes")].parse().unwrap();
+            let trace_s: f64 = row[column("trace_s")].parse().unwrap();
+            assert!(passes >= 1 && passes as f64 * trace_s >= 0.002, "{order}: a sample of at least 5 ms: {row:?}");
+        }
+    }
+}
+
+#[test]
 fn a_killed_sweep_resumes_without_losing_or_duplicating_rows() {
     let (list, ..) = names();
     let dir = temp("resume");
