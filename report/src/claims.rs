@@ -42,6 +42,8 @@ pub struct PointResult {
     pub threshold: f64,
     /// Holds, fails or inconclusive at this point.
     pub verdict: Verdict,
+    /// Inconclusive points: about how many more runs of each series would settle it (see [`runs_to_settle`]).
+    pub more_runs: Option<usize>,
 }
 
 /// Checks every claim of `spec` against the rows.
@@ -59,6 +61,15 @@ pub fn check(rows: &Rows, spec: &ReportSpec, claim: &ClaimSpec) -> ClaimResult {
         return no_points(claim, series, than);
     }
     let judged: Vec<Judged> = points.iter().map(|p| judge(&claim.kind, p)).collect();
+    let more_runs: Vec<Option<usize>> = points
+        .iter()
+        .zip(&judged)
+        .map(|(p, j)| {
+            (j.verdict == Verdict::Inconclusive)
+                .then(|| runs_to_settle(p.estimate, &claim.kind, j.threshold, p.provenance.n))
+                .flatten()
+        })
+        .collect();
     let worst = least_favourable(&judged);
     let estimate = points[worst].estimate;
     ClaimResult {
@@ -68,18 +79,20 @@ pub fn check(rows: &Rows, spec: &ReportSpec, claim: &ClaimSpec) -> ClaimResult {
         lo: estimate.lo,
         hi: estimate.hi,
         threshold: judged[worst].threshold,
-        detail: describe(&judged, &labels[worst]),
+        detail: describe(&judged, &more_runs, &labels[worst]),
         points: points
             .iter()
             .zip(&judged)
             .zip(labels)
-            .map(|((p, j), label)| PointResult {
+            .zip(more_runs)
+            .map(|(((p, j), label), more_runs)| PointResult {
                 label,
                 ratio: p.estimate.value,
                 lo: p.estimate.lo,
                 hi: p.estimate.hi,
                 threshold: j.threshold,
                 verdict: j.verdict,
+                more_runs,
             })
             .collect(),
     }
@@ -195,6 +208,28 @@ fn judge_within(e: Estimate, tolerance: f64) -> Judged {
     Judged { threshold: tolerance, safety: (-near, -far), verdict }
 }
 
+/// About how many more runs of each series would settle a point whose interval straddles a bound of its claim (the
+/// threshold, or `1 ± tolerance`), if its ratio and its runs' spread stay as they are: an interval narrows as
+/// 1/√runs, so it must shrink by the distance from the ratio to the bound. `None` when no bound is straddled or the
+/// ratio sits on one (no number of runs settles that).
+pub fn runs_to_settle(e: Estimate, kind: &ClaimKind, threshold: f64, runs: usize) -> Option<usize> {
+    let bounds = match kind {
+        ClaimKind::Faster { .. } => vec![threshold],
+        ClaimKind::Within { .. } => vec![1.0 - threshold, 1.0 + threshold],
+    };
+    let mut shrink: f64 = 1.0;
+    for bound in bounds.into_iter().filter(|&b| e.lo < b && b <= e.hi) {
+        let (half, gap) =
+            if e.value >= bound { (e.value - e.lo, e.value - bound) } else { (e.hi - e.value, bound - e.value) };
+        if gap <= 0.0 || !half.is_finite() {
+            return None;
+        }
+        shrink = shrink.max(half / gap);
+    }
+    let needed = (runs.max(1) as f64 * shrink * shrink - 1e-9).ceil(); // not one more for a rounding error
+    (shrink > 1.0 && needed.is_finite()).then(|| needed as usize - runs.max(1))
+}
+
 /// The claim's verdict: fails if any point fails, holds if every point holds, inconclusive otherwise.
 fn overall(judged: &[Judged]) -> Verdict {
     if judged.iter().any(|j| j.verdict == Verdict::Fails) {
@@ -216,16 +251,26 @@ fn least_favourable(judged: &[Judged]) -> usize {
         .expect("points is not empty")
 }
 
-/// How many points were compared, how they came out, and where the least favourable one is.
-fn describe(judged: &[Judged], worst_label: &str) -> String {
+/// How many points were compared, how they came out, what would settle the inconclusive ones, and where the least
+/// favourable one is.
+fn describe(judged: &[Judged], more_runs: &[Option<usize>], worst_label: &str) -> String {
     let counts = |v: Verdict| judged.iter().filter(|j| j.verdict == v).count();
+    let inconclusive = counts(Verdict::Inconclusive);
+    let settle = match more_runs.iter().flatten().max() {
+        Some(most) => {
+            let on_threshold = inconclusive - more_runs.iter().flatten().count();
+            let rest = if on_threshold > 0 { format!(", {on_threshold} sit on the threshold") } else { String::new() };
+            format!("; about {most} more runs of each series would settle the inconclusive{rest}")
+        }
+        None if inconclusive > 0 => "; the inconclusive sit on the threshold".to_string(),
+        None => String::new(),
+    };
     format!(
-        "{} point{} ({} hold, {} fail, {} inconclusive); least favourable at {}",
+        "{} point{} ({} hold, {} fail, {inconclusive} inconclusive{settle}); least favourable at {}",
         judged.len(),
         if judged.len() == 1 { "" } else { "s" },
         counts(Verdict::Holds),
         counts(Verdict::Fails),
-        counts(Verdict::Inconclusive),
         worst_label
     )
 }
@@ -266,5 +311,22 @@ mod tests {
             Verdict::Holds,
             "other side unknown: 0.5 × 2"
         );
+    }
+
+    #[test]
+    fn an_inconclusive_point_says_how_many_more_runs_would_settle_it() {
+        let faster = ClaimKind::Faster { series: "a".into(), than: "b".into(), factor: 1.0, per_thread: false };
+        let within = ClaimKind::Within { series: "a".into(), than: "b".into(), tolerance: 0.02 };
+        let e = |value, lo, hi| Estimate { value, lo, hi };
+        // 1.05 [0.95, 1.10] against 1: the low side must halve (0.10 -> below 0.05): 4x the runs, 30 more.
+        assert_eq!(runs_to_settle(e(1.05, 0.95, 1.10), &faster, 1.0, 10), Some(30));
+        // Leaning to fail: 0.98 [0.96, 1.01]: the high side 0.03 must shrink below 0.02: 2.25x, 23 of 10 -> 13.
+        assert_eq!(runs_to_settle(e(0.98, 0.96, 1.01), &faster, 1.0, 10), Some(13));
+        assert_eq!(runs_to_settle(e(1.0, 0.9, 1.1), &faster, 1.0, 10), None, "on the threshold");
+        assert_eq!(runs_to_settle(e(1.2, 1.1, 1.3), &faster, 1.0, 10), None, "settled already");
+        // Within 2%: 1.01 [0.99, 1.03] straddles 1.02 only: 0.02 / 0.01 -> 4x.
+        assert_eq!(runs_to_settle(e(1.01, 0.99, 1.03), &within, 0.02, 20), Some(60));
+        // Both bounds straddled: the worse side decides.
+        assert_eq!(runs_to_settle(e(1.0, 0.97, 1.04), &within, 0.02, 10), Some(30));
     }
 }

@@ -350,10 +350,11 @@ fn claim_points(md: &mut String, spec: &ReportSpec, claims: &[ClaimResult]) {
         let _ = writeln!(md, "**{}**\n", claim.text.replace('\n', " "));
         md.push_str("| point | ratio [95% CI] | threshold | verdict |\n|---|---|---|---|\n");
         for p in &claim.points {
-            let verdict = match p.verdict {
-                Verdict::Holds => "holds",
-                Verdict::Fails => "**fails**",
-                Verdict::Inconclusive => "inconclusive",
+            let verdict = match (p.verdict, p.more_runs) {
+                (Verdict::Holds, _) => "holds".to_string(),
+                (Verdict::Fails, _) => "**fails**".to_string(),
+                (Verdict::Inconclusive, Some(n)) => format!("inconclusive (~{n} more runs)"),
+                (Verdict::Inconclusive, None) => "inconclusive (on the threshold)".to_string(),
             };
             let threshold = match spec.kind {
                 ClaimKind::Faster { .. } => format!("≥ {}", compact(p.threshold)),

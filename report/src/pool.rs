@@ -105,6 +105,17 @@ fn rounds(spec: &ReportSpec, runs: &[Run], other: &str, group: &[&Run], metric: 
     Some(pairs)
 }
 
+/// The per-round ratios `metric(other) / metric(group)` where the two series ran in the same rounds (see
+/// [`rounds`]; at least two rounds, every sample of both sides paired), else `None`.
+pub fn round_ratios(spec: &ReportSpec, runs: &[Run], other: &str, group: &[&Run], metric: &str) -> Option<Vec<f64>> {
+    let numerator = samples(counterparts(spec, runs, other, group, &[column::seed]), metric);
+    if numerator.len() != group.len() || numerator.len() < 2 {
+        return None;
+    }
+    let (num, den) = rounds(spec, runs, other, group, metric)?;
+    Some(num.iter().zip(&den).map(|(n, d)| n / d).collect())
+}
+
 /// `metric(other) / metric(group)` at one point, with its interval; `None` when there is no counterpart or no
 /// sample. Where the two series ran in the same rounds (every run has one counterpart of the same repetition,
 /// see [`rounds`]) it is the median of the per-round ratios, its interval resampling rounds
@@ -146,10 +157,30 @@ pub struct Curve {
 /// One curve's runs: the settings held fixed (as [`Curve::fixed`]) and its runs grouped by x value.
 pub(crate) type CurveRuns<'a> = (String, Vec<(f64, Vec<&'a Run>)>);
 
-/// The runs of `series` split into curves (see [`Curve`]), each grouped by x value (ascending).
-/// Runs without a numeric x are left out.
+/// The values of a text x column (e.g. `workload`) in order of first appearance in `runs`: a category axis that
+/// places them at 1, 2, …; `None` for a numeric column.
+pub fn categories(runs: &[Run], x: &str) -> Option<Vec<String>> {
+    if runs.iter().any(|r| r.num(x).is_finite()) {
+        return None;
+    }
+    let mut values: Vec<String> = Vec::new();
+    for text in runs.iter().map(|r| r.text(x)).filter(|t| !t.is_empty()) {
+        if !values.iter().any(|v| v == text) {
+            values.push(text.to_string());
+        }
+    }
+    (!values.is_empty()).then_some(values)
+}
+
+/// The runs of `series` split into curves (see [`Curve`]), each grouped by x value (ascending). A text x column
+/// is a category axis ([`categories`] of all `runs`). Runs without an x value are left out.
 pub(crate) fn curves_of<'a>(runs: &'a [Run], series: &str, x: &str) -> Vec<CurveRuns<'a>> {
-    let own: Vec<&Run> = runs.iter().filter(|r| r.series() == series && r.num(x).is_finite()).collect();
+    let categories = categories(runs, x);
+    let x_of = |r: &Run| match &categories {
+        None => r.num(x),
+        Some(values) => values.iter().position(|v| v == r.text(x)).map_or(f64::NAN, |i| (i + 1) as f64),
+    };
+    let own: Vec<&Run> = runs.iter().filter(|r| r.series() == series && x_of(r).is_finite()).collect();
     let varying: Vec<&str> = POINT
         .iter()
         .copied()
@@ -167,7 +198,7 @@ pub(crate) fn curves_of<'a>(runs: &'a [Run], series: &str, x: &str) -> Vec<Curve
             }
         };
         let groups = &mut curves[index].1;
-        let value = run.num(x);
+        let value = x_of(run);
         match groups.iter_mut().find(|(v, _)| *v == value) {
             Some((_, group)) => group.push(run),
             None => groups.push((value, vec![run])),

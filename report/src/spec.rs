@@ -81,6 +81,8 @@ pub struct PlotSpec {
     pub series: Vec<String>,
     /// Only runs whose setting column takes one of the listed values (e.g. `workload = primary`).
     pub filter: Vec<(String, Vec<String>)>,
+    /// The series a speedup or efficiency plot compares with, when not the experiment's `reference`.
+    pub reference: Option<String>,
 }
 
 /// One `[[claim]]` table.

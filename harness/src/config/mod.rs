@@ -440,7 +440,7 @@ fn metric_or(s: &Section<'_>, key: &str, default: &str) -> Result<String, Error>
 
 /// One `[[plot]]` table.
 fn parse_plot(p: &Section<'_>, labels: &Labels, has_reference: bool) -> Result<PlotSpec, Error> {
-    p.only(&["file", "title", "kind", "x", "y", "log_x", "log_y", "series", "where"])?;
+    p.only(&["file", "title", "kind", "x", "y", "log_x", "log_y", "series", "where", "reference"])?;
     let file = p.required_string("file")?.to_string();
     identifier(p, "file", &file, "file stem")?;
     let kind = match p.string("kind")? {
@@ -454,8 +454,12 @@ fn parse_plot(p: &Section<'_>, labels: &Labels, has_reference: bool) -> Result<P
             );
         }
     };
-    if matches!(kind, PlotKind::Speedup | PlotKind::Efficiency) && !has_reference {
-        return Err(p.error("kind", "speedup and efficiency plots need a top-level `reference` series"));
+    let reference = p.string("reference")?.map(str::to_string);
+    if let Some(r) = &reference {
+        labels.check(p, "reference", r)?;
+    }
+    if matches!(kind, PlotKind::Speedup | PlotKind::Efficiency) && !has_reference && reference.is_none() {
+        return Err(p.error("kind", "speedup and efficiency plots need a `reference` series (top level or the plot's)"));
     }
     let x = if kind == PlotKind::TradeOff {
         metric_or(p, "x", schema::column::build_s)?
@@ -481,6 +485,7 @@ fn parse_plot(p: &Section<'_>, labels: &Labels, has_reference: bool) -> Result<P
         log_y: p.boolean("log_y")?.unwrap_or(false),
         series,
         filter: filter(p)?,
+        reference,
     })
 }
 

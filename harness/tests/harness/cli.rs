@@ -343,12 +343,13 @@ fn with_sample_ms_the_series_of_one_point_are_sampled_together() {
         let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
         let rows: Vec<Vec<&str>> = text.lines().skip(1).map(|l| l.split(',').collect()).collect();
         assert_eq!(rows.len(), 8, "2 series x 2 object counts x 2 repetitions");
+        let passes = |row: &Vec<&str>| row[column("trace_passes")].parse::<u32>().unwrap();
         for row in &rows {
             assert_eq!(row[column("sample_configs")], configs, "{order}: {row:?}");
-            let passes: u32 = row[column("trace_passes")].parse().unwrap();
-            let trace_s: f64 = row[column("trace_s")].parse().unwrap();
-            assert!(passes >= 1 && passes as f64 * trace_s >= 0.002, "{order}: a sample of at least 5 ms: {row:?}");
+            assert!(passes(row) >= 1, "{order}: {row:?}");
         }
+        // A pass of 768 rays over a few hundred spheres takes well under a millisecond: 5 ms take several.
+        assert!(rows.iter().any(|row| passes(row) > 1), "{order}: samples of several passes");
     }
 }
 

@@ -396,10 +396,24 @@ pub(crate) fn speedups(
                     format!("objects {x} ({fixed}, threads {threads})")
                 };
                 let key = format!("check|{reference}/{label}|{}|{metric}", point_key(new_group[0]).join("|"));
-                let old_e = stats::ratio_ci(&ref_old, &ser_old, stats::seed_for(&format!("{key}|old")));
-                let new_e = stats::ratio_ci(&ref_new, &ser_new, stats::seed_for(&format!("{key}|new")));
-                let ratio = new_e.value / old_e.value;
-                let (lo, hi) = ratio_of_ratios_ci([&ref_new, &ser_new, &ref_old, &ser_old], stats::seed_for(&key));
+                // Where each run's series and reference ran in the same rounds, each speedup is the median of its
+                // per-round ratios (as in reports and `ab`), and the change resamples those; else medians' ratios.
+                let paired = (
+                    pool::round_ratios(spec, new, reference, &new_group, metric),
+                    pool::round_ratios(spec, old, reference, old_group, metric),
+                );
+                let (old_e, new_e, ratio, lo, hi) = if let (Some(r_new), Some(r_old)) = paired {
+                    let old_e = stats::median_ci(&r_old, stats::seed_for(&format!("{key}|old")));
+                    let new_e = stats::median_ci(&r_new, stats::seed_for(&format!("{key}|new")));
+                    let change = stats::ratio_ci(&r_new, &r_old, stats::seed_for(&key));
+                    (old_e, new_e, change.value, change.lo, change.hi)
+                } else {
+                    let old_e = stats::ratio_ci(&ref_old, &ser_old, stats::seed_for(&format!("{key}|old")));
+                    let new_e = stats::ratio_ci(&ref_new, &ser_new, stats::seed_for(&format!("{key}|new")));
+                    let sets = [&ref_new[..], &ser_new[..], &ref_old[..], &ser_old[..]];
+                    let (lo, hi) = ratio_of_ratios_ci(sets, stats::seed_for(&key));
+                    (old_e, new_e, new_e.value / old_e.value, lo, hi)
+                };
                 let verdict = verdict(ratio, lo, hi, options.min_effect);
                 out.push(SpeedupComparison {
                     series: label.clone(),

@@ -38,7 +38,19 @@ pub struct Line {
     pub label: String,
     /// Colour and marker index, so a series looks the same in every figure.
     pub style: usize,
+    /// A colour of its own instead of the style's (e.g. its backend family's), as RGB.
+    pub colour: Option<(u8, u8, u8)>,
     pub points: Vec<ChartPoint>,
+}
+
+impl Line {
+    /// The colour it is drawn in: its own, else its style's.
+    pub fn rgb(&self) -> (u8, u8, u8) {
+        self.colour.unwrap_or_else(|| {
+            let RGBColor(r, g, b) = PALETTE[self.style % PALETTE.len()];
+            (r, g, b)
+        })
+    }
 }
 
 /// Everything one figure shows.
@@ -88,11 +100,6 @@ pub enum Mark {
 /// The most x tick labels an [`Overlay`] axis gets.
 pub const MAX_X_LABELS: usize = 12;
 
-/// Draws `chart` to `svg` and to `png`; the error is a message.
-pub fn render(chart: &Chart, svg: &Path, png: &Path) -> Result<(), (std::path::PathBuf, String)> {
-    render_with(chart, &Overlay::default(), svg, png)
-}
-
 /// Draws `chart` with `overlay` to `svg` and to `png`; the error is a message.
 pub fn render_with(
     chart: &Chart,
@@ -119,8 +126,8 @@ const AXIS_LABELS: usize = 11;
 enum Key {
     /// The dashed guide line.
     Guide,
-    /// A series' line and marker, by its style index.
-    Series(usize),
+    /// A series' line and marker: its style index and colour.
+    Series(usize, (u8, u8, u8)),
     Marks(Mark),
 }
 
@@ -166,7 +173,7 @@ fn plan(chart: &Chart, overlay: &Overlay) -> Plan {
     }
     for line in &chart.lines {
         legend.push(line.label.clone());
-        keys.push(Key::Series(line.style));
+        keys.push(Key::Series(line.style, line.rgb()));
     }
     for marks in overlay.marks.iter().filter(|m| !m.points.is_empty()) {
         legend.push(marks.label.clone());
@@ -379,8 +386,8 @@ fn draw_legend<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, plan: &Plan) -
                 root.draw(&PathElement::new([(x - 13, y), (x - 3, y)], style)).map_err(e)?;
                 root.draw(&PathElement::new([(x + 3, y), (x + 13, y)], style)).map_err(e)?;
             }
-            Key::Series(style) => {
-                let colour = PALETTE[style % PALETTE.len()];
+            Key::Series(style, (r, g, b)) => {
+                let colour = RGBColor(r, g, b);
                 let sample = EmptyElement::at(at)
                     + PathElement::new([(-13, 0), (13, 0)], colour.stroke_width(2))
                     + Polygon::new(marker(style), colour.filled());
@@ -462,7 +469,8 @@ where
     }
 
     for line in &chart.lines {
-        let colour = PALETTE[line.style % PALETTE.len()];
+        let (r, g, b) = line.rgb();
+        let colour = RGBColor(r, g, b);
         let stroke = colour.stroke_width(2);
         let shape = marker(line.style);
         // 95% intervals: a vertical bar with caps at both ends.
@@ -527,6 +535,7 @@ mod tests {
             .map(|s| Line {
                 label: format!("flat-sah-front-to-back-{s} objects 1000000 (threads 1)"),
                 style: s,
+                colour: None,
                 points: (1..=8)
                     .map(|x| {
                         let y = 1.0 + (s * 7 + x * 3) as f64 % 20.0;

@@ -11,7 +11,7 @@ use crate::pool::{self, Curve, Point, Provenance};
 use crate::rows::Rows;
 use crate::spec::{PlotKind, PlotSpec, ReportSpec};
 
-use chart::{Chart, ChartPoint, Line};
+use chart::{Chart, ChartPoint, Line, Overlay};
 
 /// Draws every plot of `spec` into `dir/figures/`; returns the files written.
 pub fn draw_all(dir: &Path, rows: &Rows, spec: &ReportSpec) -> Result<Vec<PathBuf>, Error> {
@@ -21,7 +21,8 @@ pub fn draw_all(dir: &Path, rows: &Rows, spec: &ReportSpec) -> Result<Vec<PathBu
     for plot in &spec.plots {
         let svg = figures.join(format!("{}.svg", plot.file));
         let png = figures.join(format!("{}.png", plot.file));
-        chart::render(&chart_of(rows, spec, plot), &svg, &png).map_err(|(path, e)| Error::write(path, e))?;
+        let figure = figure_of(rows, spec, plot);
+        chart::render_with(&figure.chart, &figure.overlay, &svg, &png).map_err(|(path, e)| Error::write(path, e))?;
         files.extend([svg, png]);
     }
     Ok(files)
@@ -39,23 +40,65 @@ fn plotted_series<'a>(spec: &'a ReportSpec, plot: &'a PlotSpec) -> Vec<&'a str> 
 /// A plot's chart and, per line and point, the runs behind the point (the site's tooltips).
 pub(crate) struct Figure {
     pub chart: Chart,
+    /// A category axis's labels (x ticks at 1, 2, …), else nothing.
+    pub overlay: Overlay,
     /// Parallel to `chart.lines[i].points`.
     pub provenance: Vec<Vec<Provenance>>,
 }
 
-/// What a plot shows, as chart data.
-fn chart_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Chart {
-    figure_of(rows, spec, plot).chart
+/// A backend family's colours (ours, Embree, tinybvh, obvhs): a hue each, a shade of it per variant.
+const FAMILY_SHADES: [&[(u8, u8, u8)]; 4] = [
+    &[(31, 119, 180), (94, 165, 220), (16, 72, 120), (130, 190, 235), (45, 100, 160), (10, 150, 200)],
+    &[(214, 39, 40), (255, 127, 14), (150, 20, 25), (250, 160, 110)],
+    &[(44, 160, 44), (120, 200, 100), (20, 100, 20)],
+    &[(148, 103, 189), (190, 160, 220), (100, 60, 140)],
+];
+
+/// The family of a backend by its `accel` value: 0 ours, 1 Embree, 2 tinybvh, 3 obvhs.
+fn family(accel: &str) -> usize {
+    if accel.starts_with("embree") {
+        1
+    } else if accel.starts_with("tinybvh") {
+        2
+    } else if accel.starts_with("obvhs") {
+        3
+    } else {
+        0
+    }
+}
+
+/// Each series' colour when `series` span more than one backend family (a hue per family, a shade per variant in
+/// legend order), else none: a figure of our own variants keeps the palette's distinct colours.
+fn family_colours(runs: &[crate::rows::Run], series: &[&str]) -> Vec<Option<(u8, u8, u8)>> {
+    let families: Vec<usize> = series
+        .iter()
+        .map(|s| runs.iter().find(|r| r.series() == *s).map_or(0, |r| family(r.text(column::accel))))
+        .collect();
+    if families.iter().all(|f| *f == families[0]) {
+        return vec![None; series.len()];
+    }
+    let mut seen = [0usize; 4];
+    families
+        .iter()
+        .map(|&f| {
+            let shades = FAMILY_SHADES[f];
+            seen[f] += 1;
+            Some(shades[(seen[f] - 1) % shades.len()])
+        })
+        .collect()
 }
 
 /// What a plot shows, as chart data with each point's provenance.
 pub(crate) fn figure_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Figure {
-    let reference = spec.reference.as_deref();
+    let reference = plot.reference.as_deref().or(spec.reference.as_deref());
     let metric_ok = rows.is_numeric(&plot.y);
     let runs: Vec<crate::rows::Run> = rows.runs.iter().filter(|r| r.passes(&plot.filter)).cloned().collect();
+    let categories = if plot.kind == PlotKind::TradeOff { None } else { pool::categories(&runs, &plot.x) };
+    let series = plotted_series(spec, plot);
+    let colours = family_colours(&runs, &series);
     let mut lines = Vec::new();
     let mut provenance = Vec::new();
-    for series in plotted_series(spec, plot) {
+    for (series, colour) in series.into_iter().zip(colours) {
         let curves: Vec<Curve> = match (plot.kind, reference) {
             _ if !metric_ok => Vec::new(),
             (PlotKind::Metric, _) => pool::metric_curves(&runs, series, &plot.x, &plot.y),
@@ -87,8 +130,19 @@ pub(crate) fn figure_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Figu
             let style = position.unwrap_or(spec.series.len() + lines.len());
             let label = if curve.fixed.is_empty() { series.to_string() } else { format!("{series} ({})", curve.fixed) };
             provenance.push(curve.points.iter().map(|p| p.provenance.clone()).collect());
-            lines.push(Line { label, style, points });
+            lines.push(Line { label, style, colour, points });
         }
+    }
+    // On a category axis the lines sit side by side within each category, so that their intervals do not hide
+    // each other.
+    let mut overlay = Overlay::default();
+    if let Some(values) = &categories {
+        let n = lines.len().max(1) as f64;
+        for (i, line) in lines.iter_mut().enumerate() {
+            let offset = (i as f64 - (n - 1.0) / 2.0) * (0.6 / n);
+            line.points.iter_mut().for_each(|p| p.x += offset);
+        }
+        overlay.x_ticks = values.iter().enumerate().map(|(i, v)| ((i + 1) as f64, v.clone())).collect();
     }
     let reference = reference.unwrap_or("reference");
     let (y_label, guide) = match plot.kind {
@@ -105,7 +159,8 @@ pub(crate) fn figure_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Figu
     };
     let title = if lines.is_empty() { format!("{} (no data)", plot.title) } else { plot.title.clone() };
     let x_label = if plot.kind == PlotKind::TradeOff { metric_label(&plot.x) } else { axis_label(&plot.x) };
-    Figure { chart: Chart { title, x_label, y_label, log_x: plot.log_x, log_y: plot.log_y, lines, guide }, provenance }
+    let chart = Chart { title, x_label, y_label, log_x: plot.log_x, log_y: plot.log_y, lines, guide };
+    Figure { chart, overlay, provenance }
 }
 
 fn is_time(name: &str) -> bool {
@@ -138,5 +193,65 @@ fn axis_label(name: &str) -> String {
         column::leaf_size => "max leaf size".into(),
         column::sah_bins => "SAH bins".into(),
         other => other.replace('_', " "),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The golden rows with the 100-object runs tracing shadow rays and the `bvh` series run by Embree.
+    fn rows() -> Rows {
+        let golden = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/runs.csv");
+        let text = std::fs::read_to_string(golden).unwrap();
+        let changed: String = text
+            .lines()
+            .map(|l| {
+                let l = if l.contains(",random-spheres,100,") { l.replace(",primary,", ",shadow,") } else { l.into() };
+                l.replace(",1,bvh,", ",1,embree,") + "\n"
+            })
+            .collect();
+        let dir = std::env::temp_dir().join(format!("bvhlab-figures-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("runs.csv"), changed).unwrap();
+        let rows = crate::rows::read(&dir.join("runs.csv")).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        rows
+    }
+
+    #[test]
+    fn a_word_valued_x_is_a_category_axis_with_families_coloured() {
+        let rows = rows();
+        let series: Vec<String> = crate::distinct(rows.runs.iter().map(|r| r.series().to_string()));
+        assert_eq!(series.len(), 2, "{series:?}");
+        let spec = ReportSpec { series: series.clone(), ..ReportSpec::default() };
+        let plot = PlotSpec {
+            file: "by-workload".into(),
+            title: "by workload".into(),
+            kind: PlotKind::Metric,
+            x: column::workload.into(),
+            y: column::trace_s.into(),
+            log_x: false,
+            log_y: false,
+            series: vec![],
+            filter: vec![],
+            reference: None,
+        };
+        let figure = figure_of(&rows, &spec, &plot);
+        assert_eq!(figure.overlay.x_ticks, vec![(1.0, "primary".to_string()), (2.0, "shadow".to_string())]);
+        assert!(!figure.chart.lines.is_empty());
+        for line in &figure.chart.lines {
+            for p in &line.points {
+                assert!((p.x - p.x.round()).abs() < 0.5 && p.x != p.x.round(), "beside its category: {}", p.x);
+            }
+        }
+        let colour = |s: &str| figure.chart.lines.iter().find(|l| l.label.starts_with(s)).unwrap().colour;
+        assert_eq!(colour(&series[0]), Some(FAMILY_SHADES[family("list")][0]), "ours: blue");
+        assert_eq!(colour(&series[1]), Some(FAMILY_SHADES[family("embree")][0]), "Embree: red");
+        // A ratio plot against the plot's own reference.
+        let plot = PlotSpec { kind: PlotKind::Speedup, reference: Some(series[1].clone()), ..plot };
+        let figure = figure_of(&rows, &spec, &plot);
+        assert!(figure.chart.y_label.contains(&series[1]), "{}", figure.chart.y_label);
+        assert!(figure.chart.lines.iter().all(|l| l.label.starts_with(&series[0])), "the reference is not drawn");
     }
 }

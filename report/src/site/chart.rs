@@ -24,6 +24,9 @@ pub struct SiteLine {
     pub label: String,
     /// Colour index, as in the PNG figures.
     pub style: usize,
+    /// A colour of its own (`#rrggbb`, e.g. its backend family's) instead of the style's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub colour: Option<String>,
     pub points: Vec<SitePoint>,
 }
 
@@ -63,6 +66,7 @@ impl SiteChart {
             .map(|(i, line)| SiteLine {
                 label: line.label.clone(),
                 style: line.style,
+                colour: line.colour.map(|(r, g, b)| format!("#{r:02x}{g:02x}{b:02x}")),
                 points: line
                     .points
                     .iter()

@@ -75,6 +75,7 @@ pub fn body(exp: &Experiment, out_dir: &Path) -> Result<(String, Vec<PathBuf>), 
     let mut html =
         format!("<h1>{}</h1>\n<p class=\"description\">{}</p>\n", escape(&exp.name), escape(&exp.spec.description));
     html.push_str(&provenance(exp));
+    html.push_str(&ratio_matrix(exp));
     html.push_str(&claims_table(&exp.claims));
     let (figures_html, copied) = figures_section(exp, out_dir)?;
     html.push_str(&figures_html);
@@ -105,6 +106,75 @@ fn provenance(exp: &Experiment) -> String {
     html
 }
 
+/// The answer at a glance: every series against the experiment's reference at every point it was compared at
+/// (rows: the points; columns: the series), the ratio `metric(reference) / metric(series)` (above 1: the series is
+/// faster) coloured by what its 95% interval says — faster, slower, or not told apart.
+fn ratio_matrix(exp: &Experiment) -> String {
+    let Some(reference) = exp.spec.reference.as_deref() else { return String::new() };
+    let runs = &exp.rows.runs;
+    let mut points: Vec<String> = Vec::new();
+    let mut columns: Vec<(String, Vec<(usize, crate::stats::Estimate)>)> = Vec::new();
+    for series in exp.spec.series.iter().filter(|s| *s != reference) {
+        let Some(first) = runs.iter().find(|r| r.series() == series) else { continue };
+        let metric = exp.spec.speedup_metric_of(first.text(column::workload));
+        let mut cells = Vec::new();
+        for curve in crate::pool::ratio_curves(&exp.spec, runs, reference, series, column::objects, metric) {
+            for p in curve.points {
+                let label = match (curve.fixed.is_empty(), p.x) {
+                    (true, x) => format!("{} objects", num(x)),
+                    (false, 0.0) => curve.fixed.clone(),
+                    (false, x) => format!("{} objects, {}", num(x), curve.fixed),
+                };
+                let at = points.iter().position(|l| *l == label).unwrap_or_else(|| {
+                    points.push(label);
+                    points.len() - 1
+                });
+                cells.push((at, p.estimate));
+            }
+        }
+        if !cells.is_empty() {
+            columns.push((series.clone(), cells));
+        }
+    }
+    if columns.is_empty() {
+        return String::new();
+    }
+    let mut html = format!(
+        "<h2 id=\"ratios\">Against {reference}</h2>\n<p>Each cell is <code>{reference}</code>'s time over the \
+         series' time at that point (above 1: the series is faster), the median of the per-round ratios; green where \
+         its 95% interval lies above 1, red where below, grey where it contains 1. Hover a cell for its interval.</p>\n\
+         <div class=\"table-wrap\"><table class=\"matrix\"><thead><tr><th>point</th>{}</tr></thead><tbody>\n",
+        columns.iter().map(|(s, _)| format!("<th>{}</th>", escape(s))).collect::<String>(),
+        reference = escape(reference)
+    );
+    for (i, point) in points.iter().enumerate() {
+        html.push_str(&format!("<tr><th>{}</th>", escape(point)));
+        for (_, cells) in &columns {
+            match cells.iter().find(|(at, _)| *at == i) {
+                Some((_, e)) => {
+                    let class = if e.lo > 1.0 {
+                        "faster"
+                    } else if e.hi < 1.0 {
+                        "slower"
+                    } else {
+                        "same"
+                    };
+                    html.push_str(&format!(
+                        "<td class=\"{class}\" title=\"95% interval [{}, {}]\">{}</td>",
+                        num(e.lo),
+                        num(e.hi),
+                        num(e.value)
+                    ));
+                }
+                None => html.push_str("<td></td>"),
+            }
+        }
+        html.push_str("</tr>\n");
+    }
+    html.push_str("</tbody></table></div>\n");
+    html
+}
+
 fn claims_table(claims: &[ClaimResult]) -> String {
     if claims.is_empty() {
         return "<h2 id=\"claims\">Claims</h2>\n<p>None.</p>\n".into();
@@ -118,8 +188,13 @@ fn claims_table(claims: &[ClaimResult]) -> String {
             .points
             .iter()
             .map(|p| {
+                let settle = match (p.verdict, p.more_runs) {
+                    (Verdict::Inconclusive, Some(n)) => format!(" ~{n} more runs"),
+                    (Verdict::Inconclusive, None) => " on the threshold".to_string(),
+                    _ => String::new(),
+                };
                 format!(
-                    "<tr><td>{}</td><td>{}</td><td>{} [{}, {}]</td><td>{}</td></tr>",
+                    "<tr><td>{}{settle}</td><td>{}</td><td>{} [{}, {}]</td><td>{}</td></tr>",
                     badge(p.verdict),
                     escape(&p.label),
                     num(p.ratio),
@@ -152,19 +227,23 @@ pub fn charts(exp: &Experiment) -> Vec<SiteChart> {
         .iter()
         .map(|plot| {
             let figure = figures::figure_of(&exp.rows, &exp.spec, plot);
-            let chart = &figure.chart;
-            SiteChart::of(chart, |i, j| {
+            let (chart, ticks) = (&figure.chart, &figure.overlay.x_ticks);
+            let mut site = SiteChart::of(chart, |i, j| {
                 let (line, p, prov) = (&chart.lines[i], &chart.lines[i].points[j], &figure.provenance[i][j]);
+                // On a category axis a point sits beside its category's whole number: name the category.
+                let x = ticks.iter().find(|t| (t.0 - p.x).abs() < 0.5).map_or_else(|| num(p.x), |t| t.1.clone());
                 vec![
                     line.label.clone(),
-                    format!("{}: {}", chart.x_label, num(p.x)),
+                    format!("{}: {x}", chart.x_label),
                     format!("median {}", num(p.y)),
                     format!("95% interval [{}, {}]", num(p.lo), num(p.hi)),
                     format!("n {}", prov.n),
                     format!("commit {}", prov.commits.join(", ")),
                     format!("machine {}", prov.machines.join(", ")),
                 ]
-            })
+            });
+            site.x_ticks = ticks.clone();
+            site
         })
         .collect()
 }
@@ -199,12 +278,49 @@ fn figures_section(exp: &Experiment, out_dir: &Path) -> Result<(String, Vec<Path
     Ok((html, copied))
 }
 
-/// The summary frame as a sortable table's data: columns equal in every row are listed once above it.
+/// The summary's columns a reader looks for first, in this order: the series and the point, the answer (speedup
+/// with its interval), then the medians with theirs. Every other column follows in the frame's order, and the ids last.
+const FIRST_COLUMNS: [&str; 21] = [
+    column::series,
+    column::scene,
+    column::mesh,
+    column::view,
+    column::workload,
+    column::objects,
+    column::threads,
+    "speedup",
+    "speedup_lo",
+    "speedup_hi",
+    "trace_s_median",
+    "trace_s_median_lo",
+    "trace_s_median_hi",
+    "mrays_per_s_median",
+    "mrays_per_s_median_lo",
+    "mrays_per_s_median_hi",
+    "build_s_median",
+    "build_s_median_lo",
+    "build_s_median_hi",
+    "total_s_median",
+    "n",
+];
+
+/// Columns that identify rather than describe, shown last.
+const LAST_COLUMNS: [&str; 2] = [column::config_id, column::machine_id];
+
+/// The summary frame as a sortable table's data: columns equal in every row are listed once above it; the
+/// readable columns come first ([`FIRST_COLUMNS`]), the ids last.
 pub fn summary_json(frame: &DataFrame) -> serde_json::Value {
     let mut columns = Vec::new();
     let mut constant = Vec::new();
     let mut values: Vec<Vec<serde_json::Value>> = Vec::new();
-    for c in frame.columns() {
+    let rank = |name: &str| match FIRST_COLUMNS.iter().position(|c| *c == name) {
+        Some(i) => i,
+        None if LAST_COLUMNS.contains(&name) => usize::MAX,
+        None => FIRST_COLUMNS.len(),
+    };
+    let mut ordered: Vec<_> = frame.columns().iter().collect();
+    ordered.sort_by_key(|c| rank(c.name().as_str())); // stable: the frame's order within a rank
+    for c in ordered {
         let numeric = c.dtype().is_primitive_numeric();
         let cells: Vec<serde_json::Value> = if numeric {
             match c.cast(&DataType::Float64).and_then(|c| c.f64().map(|a| a.iter().collect::<Vec<_>>())) {

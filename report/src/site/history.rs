@@ -155,7 +155,7 @@ fn track_page(pair: &[Track], commits: &[CommitEntry]) -> String {
             title: format!("{} instructions: {}", track.phase.name(), title),
             x_label: "commit (first-parent order)".into(),
             y_label: format!("{} instructions", track.phase.name()),
-            lines: vec![SiteLine { label: track.phase.name().into(), style: k, points }],
+            lines: vec![SiteLine { label: track.phase.name().into(), style: k, colour: None, points }],
             x_ticks: commits.iter().enumerate().map(|(i, c)| (i as f64, short(&c.commit))).collect(),
             marks: vec![
                 SiteMarks {
@@ -247,7 +247,7 @@ fn speedup_chart(h: &SpeedupHistory, commits: &[CommitEntry]) -> SiteChart {
                 }
             })
             .collect();
-        lines.push(SiteLine { label, style: i, points });
+        lines.push(SiteLine { label, style: i, colour: None, points });
     }
     SiteChart {
         title: format!("{}: speedups over the appended runs", h.experiment),

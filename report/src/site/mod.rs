@@ -116,6 +116,7 @@ mod tests {
                 log_y: true,
                 series: vec![],
                 filter: vec![],
+                reference: None,
             }],
             ..ReportSpec::default()
         }
@@ -175,6 +176,34 @@ mod tests {
         assert_eq!(tip[0], series);
         assert!(tip.contains(&format!("median {}", html::num(median)).as_str()), "{tip:?}");
         assert!(tip.iter().any(|t| t.starts_with("n ")) && tip.iter().any(|t| t.starts_with("commit ")));
+        assert_eq!(names[0], "series", "readable columns first");
+        assert!(!page.contains("class=\"matrix\""), "no reference, no ratio matrix");
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[test]
+    fn an_experiment_page_leads_with_the_ratio_matrix_against_its_reference() {
+        let root = results("matrix");
+        let dir = root.join("one");
+        let mut spec = spec(&dir);
+        spec.reference = Some(spec.series[0].clone());
+        let fixed: Vec<String> =
+            ["accel", "split", "leaf_size", "sah_bins", "traversal", "sah_traversal_cost", "sah_intersection_cost"]
+                .map(String::from)
+                .into();
+        spec.series_fixed = spec.series.iter().map(|s| (s.clone(), fixed.clone())).collect();
+        let exp = Experiment::read(&dir, &spec).unwrap();
+        let (page, _) = experiment::body(&exp, &root.join("site")).unwrap();
+        let matrix = page.find("class=\"matrix\"").expect("a ratio matrix");
+        assert!(matrix < page.find("id=\"claims\"").unwrap() && matrix < page.find("id=\"summary\"").unwrap());
+        // One row per object count, one column per other series, each cell the paired ratio of the summary.
+        let table = &page[matrix..matrix + page[matrix..].find("</table>").unwrap()];
+        let rows = table.matches("<tr><th>").count() - 1; // the header's row
+        assert_eq!(rows, 2, "10 and 100 objects");
+        for series in &spec.series[1..] {
+            assert!(table.contains(&format!("<th>{}</th>", html::escape(series))), "{series}");
+        }
+        assert_eq!(table.matches("<td class=\"").count(), 2, "a cell per object count");
         std::fs::remove_dir_all(&root).unwrap();
     }
 

@@ -50,6 +50,7 @@ fn plot(file: &str, title: &str, kind: PlotKind, x: &str, log: bool) -> PlotSpec
         log_y: log,
         series: vec![],
         filter: vec![],
+        reference: None,
     }
 }
 

@@ -138,7 +138,7 @@
       const li = html("li", {}, legend);
       const b = html("button", { type: "button", class: "series", "data-line": i, title: "show or hide" }, li);
       const swatch = html("span", { class: "swatch" }, b);
-      swatch.style.background = PALETTE[line.style % PALETTE.length];
+      swatch.style.background = (line.colour || PALETTE[line.style % PALETTE.length]);
       html("span", {}, b, line.label);
       b.addEventListener("click", () => {
         if (state.hidden.has(i)) state.hidden.delete(i); else state.hidden.add(i);
@@ -214,7 +214,7 @@
       const ok = (v, s) => v !== null && isFinite(v) && (!s.log || v > 0);
       spec.lines.forEach((line, i) => {
         if (state.hidden.has(i)) return;
-        const colour = PALETTE[line.style % PALETTE.length];
+        const colour = (line.colour || PALETTE[line.style % PALETTE.length]);
         const pts = line.points.filter((p) => ok(p.x, X) && ok(p.y, Y));
         if (pts.length > 1) {
           const d = pts.map((p, k) => (k ? "L" : "M") + X(p.x).toFixed(1) + " " + Y(p.y).toFixed(1)).join("");
@@ -236,7 +236,7 @@
       // Points last, on top, each hoverable (and a link where it has one).
       spec.lines.forEach((line, i) => {
         if (state.hidden.has(i)) return;
-        const colour = PALETTE[line.style % PALETTE.length];
+        const colour = (line.colour || PALETTE[line.style % PALETTE.length]);
         line.points.forEach((p, k) => {
           if (!ok(p.x, X) || !ok(p.y, Y)) return;
           const parent = p.href ? svg("a", { href: p.href }, layer) : layer;
