@@ -251,20 +251,23 @@ fn least_favourable(judged: &[Judged]) -> usize {
         .expect("points is not empty")
 }
 
+/// More runs than this to settle a point: it sits on its threshold, for any practical purpose.
+pub const SETTLE_LIMIT: usize = 1000;
+
 /// How many points were compared, how they came out, what would settle the inconclusive ones, and where the least
 /// favourable one is.
 fn describe(judged: &[Judged], more_runs: &[Option<usize>], worst_label: &str) -> String {
     let counts = |v: Verdict| judged.iter().filter(|j| j.verdict == v).count();
     let inconclusive = counts(Verdict::Inconclusive);
-    let settle = match more_runs.iter().flatten().max() {
-        Some(most) => {
-            let on_threshold = inconclusive - more_runs.iter().flatten().count();
-            let rest = if on_threshold > 0 { format!(", {on_threshold} sit on the threshold") } else { String::new() };
-            format!("; about {most} more runs of each series would settle the inconclusive{rest}")
-        }
-        None if inconclusive > 0 => "; the inconclusive sit on the threshold".to_string(),
-        None => String::new(),
-    };
+    let near: Vec<usize> = more_runs.iter().flatten().copied().filter(|&n| n <= SETTLE_LIMIT).collect();
+    let mut settle = String::new();
+    if let (Some(least), Some(most)) = (near.iter().min(), near.iter().max()) {
+        let runs = if least == most { format!("{least}") } else { format!("{least}–{most}") };
+        settle.push_str(&format!("; {} would settle with about {runs} more runs of each series", near.len()));
+    }
+    if inconclusive > near.len() {
+        settle.push_str(&format!("; {} sit on the threshold", inconclusive - near.len()));
+    }
     format!(
         "{} point{} ({} hold, {} fail, {inconclusive} inconclusive{settle}); least favourable at {}",
         judged.len(),

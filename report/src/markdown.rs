@@ -353,8 +353,10 @@ fn claim_points(md: &mut String, spec: &ReportSpec, claims: &[ClaimResult]) {
             let verdict = match (p.verdict, p.more_runs) {
                 (Verdict::Holds, _) => "holds".to_string(),
                 (Verdict::Fails, _) => "**fails**".to_string(),
-                (Verdict::Inconclusive, Some(n)) => format!("inconclusive (~{n} more runs)"),
-                (Verdict::Inconclusive, None) => "inconclusive (on the threshold)".to_string(),
+                (Verdict::Inconclusive, Some(n)) if n <= crate::claims::SETTLE_LIMIT => {
+                    format!("inconclusive (~{n} more runs)")
+                }
+                (Verdict::Inconclusive, _) => "inconclusive (on the threshold)".to_string(),
             };
             let threshold = match spec.kind {
                 ClaimKind::Faster { .. } => format!("≥ {}", compact(p.threshold)),

@@ -189,8 +189,8 @@ fn claims_table(claims: &[ClaimResult]) -> String {
             .iter()
             .map(|p| {
                 let settle = match (p.verdict, p.more_runs) {
-                    (Verdict::Inconclusive, Some(n)) => format!(" ~{n} more runs"),
-                    (Verdict::Inconclusive, None) => " on the threshold".to_string(),
+                    (Verdict::Inconclusive, Some(n)) if n <= claims::SETTLE_LIMIT => format!(" ~{n} more runs"),
+                    (Verdict::Inconclusive, _) => " on the threshold".to_string(),
                     _ => String::new(),
                 };
                 format!(
