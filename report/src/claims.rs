@@ -125,13 +125,7 @@ fn collect_points(
     if rows.is_numeric(&claim.metric) {
         for curve in pool::ratio_curves(spec, &runs, than, series, column::objects, &claim.metric) {
             for point in curve.points.into_iter().filter(in_range) {
-                let fixed = if curve.fixed.is_empty() { String::new() } else { format!(" ({})", curve.fixed) };
-                // A mesh has no object count (0): its point is named by the settings alone.
-                labels.push(if point.x == 0.0 && !curve.fixed.is_empty() {
-                    curve.fixed.clone()
-                } else {
-                    format!("{} objects{fixed}", point.x)
-                });
+                labels.push(pool::point_label(&curve.fixed, point.x));
                 points.push(point);
             }
         }

@@ -108,8 +108,20 @@ fn rounds(spec: &ReportSpec, runs: &[Run], other: &str, group: &[&Run], metric: 
 /// The per-round ratios `metric(other) / metric(group)` where the two series ran in the same rounds (see
 /// [`rounds`]; at least two rounds, every sample of both sides paired), else `None`.
 pub fn round_ratios(spec: &ReportSpec, runs: &[Run], other: &str, group: &[&Run], metric: &str) -> Option<Vec<f64>> {
-    let numerator = samples(counterparts(spec, runs, other, group, &[column::seed]), metric);
-    if numerator.len() != group.len() || numerator.len() < 2 {
+    let partners = samples(counterparts(spec, runs, other, group, &[column::seed]), metric).len();
+    paired_ratios(spec, runs, other, group, metric, partners)
+}
+
+/// [`round_ratios`] given how many samples of `other` match the group (the counterparts a caller already found).
+fn paired_ratios(
+    spec: &ReportSpec,
+    runs: &[Run],
+    other: &str,
+    group: &[&Run],
+    metric: &str,
+    partners: usize,
+) -> Option<Vec<f64>> {
+    if partners != group.len() || partners < 2 {
         return None;
     }
     let (num, den) = rounds(spec, runs, other, group, metric)?;
@@ -118,8 +130,8 @@ pub fn round_ratios(spec: &ReportSpec, runs: &[Run], other: &str, group: &[&Run]
 
 /// `metric(other) / metric(group)` at one point, with its interval; `None` when there is no counterpart or no
 /// sample. Where the two series ran in the same rounds (every run has one counterpart of the same repetition,
-/// see [`rounds`]) it is the median of the per-round ratios, its interval resampling rounds
-/// ([`stats::paired_ratio_ci`]); otherwise the ratio of the two medians, each side resampled on its own
+/// see [`rounds`]) it is the median of the per-round ratios, its interval resampling rounds (as
+/// [`stats::paired_ratio_ci`]); otherwise the ratio of the two medians, each side resampled on its own
 /// ([`stats::ratio_ci`]). `key` seeds the bootstrap.
 pub fn ratio_against(
     spec: &ReportSpec,
@@ -136,10 +148,9 @@ pub fn ratio_against(
         return None;
     }
     if numerator.len() == denominator.len()
-        && numerator.len() > 1
-        && let Some((num, den)) = rounds(spec, runs, other, group, metric)
+        && let Some(ratios) = paired_ratios(spec, runs, other, group, metric, numerator.len())
     {
-        return Some(stats::paired_ratio_ci(&num, &den, stats::seed_for(key)));
+        return Some(stats::median_ci(&ratios, stats::seed_for(key)));
     }
     Some(stats::ratio_ci(&numerator, &denominator, stats::seed_for(key)))
 }
@@ -163,12 +174,7 @@ pub fn categories(runs: &[Run], x: &str) -> Option<Vec<String>> {
     if runs.iter().any(|r| r.num(x).is_finite()) {
         return None;
     }
-    let mut values: Vec<String> = Vec::new();
-    for text in runs.iter().map(|r| r.text(x)).filter(|t| !t.is_empty()) {
-        if !values.iter().any(|v| v == text) {
-            values.push(text.to_string());
-        }
-    }
+    let values = crate::distinct(runs.iter().map(|r| r.text(x)).filter(|t| !t.is_empty()).map(String::from));
     (!values.is_empty()).then_some(values)
 }
 
@@ -286,6 +292,16 @@ pub fn ratio_curves(spec: &ReportSpec, runs: &[Run], other: &str, series: &str, 
         let estimate = ratio_against(spec, runs, other, group, metric, &[column::seed], &key)?;
         Some((estimate, max_threads(&counterparts(spec, runs, other, group, &[column::seed]))))
     })
+}
+
+/// How claims and the site's ratio matrix name a point of a curve: its settings (`fixed`) where it has no object
+/// count (a mesh), else its object count with them.
+pub fn point_label(fixed: &str, x: f64) -> String {
+    match (fixed.is_empty(), x == 0.0) {
+        (false, true) => fixed.to_string(),
+        (false, false) => format!("{x} objects ({fixed})"),
+        (true, _) => format!("{x} objects"),
+    }
 }
 
 /// The key of a run's seed pool: series plus every setting except `seed` (see `schema::row::pool_key`).

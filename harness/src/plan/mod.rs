@@ -131,7 +131,7 @@ impl Plan {
             .iter()
             .flat_map(|s| Axis::ALL.iter().enumerate().filter(|(_, a)| s.fixed.contains_key(a)).map(|(i, _)| i))
             .collect();
-        let (mut points, mut point_of): (Vec<Vec<AxisValue>>, Vec<usize>) = (Vec::new(), Vec::new());
+        let mut points: Vec<Vec<AxisValue>> = Vec::new();
         let mut seen = HashSet::new();
         let mut above_cores = Vec::new();
         for s in series {
@@ -165,16 +165,16 @@ impl Plan {
                         .filter(|(i, _)| !fixed_somewhere.contains(i))
                         .map(|(_, v)| v.clone())
                         .collect();
-                    point_of.push(points.iter().position(|p| *p == point).unwrap_or_else(|| {
+                    let point = points.iter().position(|p| *p == point).unwrap_or_else(|| {
                         points.push(point);
                         points.len() - 1
-                    }));
+                    });
                     configurations.push(Configuration {
                         id,
                         series: s.label.clone(),
                         settings,
                         threads: configured.threads,
-                        point: *point_of.last().expect("pushed above"),
+                        point,
                     });
                 }
             }
@@ -205,7 +205,7 @@ impl Plan {
                 "Thread counts {above_cores:?} exceed the {cores} logical cores of this machine: those runs oversubscribe the CPU."
             ));
         }
-        let runs = order::runs(exp, &point_of);
+        let runs = order::runs(exp, &configurations.iter().map(|c| c.point).collect::<Vec<_>>());
         Ok(Plan { configurations, runs, sphere_file, notes, shard: None, sample_s: exp.sample_s })
     }
 

@@ -4,7 +4,7 @@
 use schema::Row;
 
 use super::adaptive::{self, Sampler};
-use super::measure::{self, Context, TakesPasses, Timing, Trial};
+use super::measure::{self, Context, Local, TakesPasses, Timing, Trial};
 use super::validate::RayBank;
 use super::worker::{Step, Worker, WorkerRequest};
 use super::{Checked, worker_request, workload_rays};
@@ -102,27 +102,17 @@ impl<'a> Sweep<'a> {
         let p = &self.states[config].pending;
         p.warmups as f64 + self.sampler.expected_left(config).min(p.repetitions as f64)
     }
-}
 
-impl<'a> Sweep<'a> {
-    /// Times one run of each of `configs`, starting their runners on their first. One configuration is timed
-    /// alone; several (the series of one point in an interleaved round with `sample_ms`) are built one after the
-    /// other and then sampled together, a pass of each in turn ([`measure::sample`]).
+    /// Times one run of each of `configs`, starting their runners on their first: each is built, one after the
+    /// other, and then they are sampled together, a pass of each in turn ([`measure::sample`]; one configuration
+    /// alone is one run as it always was). Several are the series of one point in an interleaved round with
+    /// `sample_ms`.
     pub fn time(&mut self, configs: &[usize], plan: &Plan, bank: &mut RayBank) -> Result<Vec<Timing>, Error> {
         let rays: Vec<_> =
             configs.iter().map(|&i| workload_rays(plan, &self.states[i].configuration.settings, bank)).collect();
         let mut picked: Vec<(usize, &mut ConfigurationState<'a>)> =
             self.states.iter_mut().enumerate().filter(|(i, _)| configs.contains(i)).collect();
         picked.sort_by_key(|(i, _)| configs.iter().position(|c| c == i));
-        if let [(_, state)] = picked.as_mut_slice() {
-            let c = state.configuration;
-            return Ok(vec![match state.runner()? {
-                Runner::Worker(worker) => worker.time(&worker_request(plan, c))?,
-                Runner::Here(setup) => {
-                    measure::timed(&c.settings, plan.scene_file(), rays[0].as_deref(), setup, plan.sample_s)?
-                }
-            }]);
-        }
         let mut turns = Vec::new();
         for ((_, state), rays) in picked.iter_mut().zip(&rays) {
             let c = state.configuration;
@@ -134,7 +124,7 @@ impl<'a> Sweep<'a> {
                 }
                 Runner::Here(setup) => {
                     let cx = Context { settings: &c.settings, file: plan.scene_file(), rays: rays.as_deref(), setup };
-                    Turn::Here { trial: Trial::prepare(&cx)?, cx }
+                    Turn::Here(Local { trial: Trial::prepare(&cx)?, cx })
                 }
             });
         }
@@ -145,16 +135,16 @@ impl<'a> Sweep<'a> {
     }
 }
 
-/// A configuration's run whose passes take turns with others': a trial in this process, or one in its worker.
+/// A configuration's run taken pass by pass: a trial in this process, or one in its worker.
 enum Turn<'a> {
-    Here { trial: Trial, cx: Context<'a> },
+    Here(Local<'a>),
     Worker { worker: &'a mut Worker, request: WorkerRequest },
 }
 
 impl TakesPasses for Turn<'_> {
     fn pass(&mut self) -> Result<f64, Error> {
         match self {
-            Turn::Here { trial, cx } => Ok(trial.pass(cx)),
+            Turn::Here(local) => local.pass(),
             Turn::Worker { worker, request } => worker.step(request, Step::Pass),
         }
     }
@@ -164,7 +154,7 @@ impl Turn<'_> {
     /// The run's timing from the passes the sample kept.
     fn finish(self, passes: Vec<f64>, steal_s: Option<f64>, sample_configs: u32) -> Result<Timing, Error> {
         match self {
-            Turn::Here { trial, cx } => Ok(trial.finish(&cx, &passes, steal_s, sample_configs)),
+            Turn::Here(local) => Ok(local.finish(&passes, steal_s, sample_configs)),
             Turn::Worker { worker, request } => worker.step(&request, Step::Finish { passes, steal_s, sample_configs }),
         }
     }

@@ -120,11 +120,7 @@ fn ratio_matrix(exp: &Experiment) -> String {
         let mut cells = Vec::new();
         for curve in crate::pool::ratio_curves(&exp.spec, runs, reference, series, column::objects, metric) {
             for p in curve.points {
-                let label = match (curve.fixed.is_empty(), p.x) {
-                    (true, x) => format!("{} objects", num(x)),
-                    (false, 0.0) => curve.fixed.clone(),
-                    (false, x) => format!("{} objects, {}", num(x), curve.fixed),
-                };
+                let label = crate::pool::point_label(&curve.fixed, p.x);
                 let at = points.iter().position(|l| *l == label).unwrap_or_else(|| {
                     points.push(label);
                     points.len() - 1
