@@ -17,7 +17,7 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use report::stats::{Estimate, paired_ratio_ci, seed_for};
+use report::stats::{Estimate, paired_ratio_ci};
 
 use crate::config::Experiment;
 use crate::error::Error;
@@ -590,7 +590,7 @@ pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
     let mut pairs = measure(&plan, &all, rounds, bins, &root, "")?;
     let speed = |c: &Configuration, pair: &Pair| {
         // Old and new ran in the same rounds (one after the other): the median of the per-round ratios.
-        let e: Estimate = paired_ratio_ci(&pair.new, &pair.old, seed_for(&c.id));
+        let e: Estimate = paired_ratio_ci(&pair.new, &pair.old);
         (Speed::of(&e, request.min_effect, c.settings.strategy().threads == 1), e)
     };
     let flagged: Vec<usize> =

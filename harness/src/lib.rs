@@ -270,8 +270,12 @@ fn validate_command(args: &ValidateArgs) -> Result<(), Error> {
     let cores = plan::available_threads();
     let mut plan = Plan::new(&exp, cores)?;
     plan.skip_unavailable(&exp.path.display().to_string(), false)?;
-    let seconds: f64 =
-        plan.runs.iter().map(|r| plan::estimate_seconds(&plan.configurations[r.config].settings, cores)).sum();
+    // A run with `sample_ms` traces at least that long.
+    let seconds: f64 = plan
+        .runs
+        .iter()
+        .map(|r| plan::estimate_seconds(&plan.configurations[r.config].settings, cores) + exp.sample_s)
+        .sum();
     let series: Vec<String> = exp
         .series
         .iter()

@@ -3,7 +3,7 @@
 use crate::pool::{self, Point};
 use crate::rows::Rows;
 use crate::spec::{ClaimKind, ClaimSpec, ReportSpec, Verdict};
-use crate::stats::Estimate;
+use crate::stats::{self, Estimate};
 use schema::column;
 
 /// A checked claim.
@@ -205,8 +205,12 @@ fn judge_within(e: Estimate, tolerance: f64) -> Judged {
 /// About how many more runs of each series would settle a point whose interval straddles a bound of its claim (the
 /// threshold, or `1 ± tolerance`), if its ratio and its runs' spread stay as they are: an interval narrows as
 /// 1/√runs, so it must shrink by the distance from the ratio to the bound. `None` when no bound is straddled or the
-/// ratio sits on one (no number of runs settles that).
+/// ratio sits on one (no number of runs settles that). A point without an interval (fewer runs than
+/// [`stats::MIN_SAMPLES_FOR_INTERVAL`]) needs at least the runs that give it one.
 pub fn runs_to_settle(e: Estimate, kind: &ClaimKind, threshold: f64, runs: usize) -> Option<usize> {
+    if e.lo.is_nan() || e.hi.is_nan() {
+        return (runs < stats::MIN_SAMPLES_FOR_INTERVAL).then(|| stats::MIN_SAMPLES_FOR_INTERVAL - runs);
+    }
     let bounds = match kind {
         ClaimKind::Faster { .. } => vec![threshold],
         ClaimKind::Within { .. } => vec![1.0 - threshold, 1.0 + threshold],
@@ -325,5 +329,7 @@ mod tests {
         assert_eq!(runs_to_settle(e(1.01, 0.99, 1.03), &within, 0.02, 20), Some(60));
         // Both bounds straddled: the worse side decides.
         assert_eq!(runs_to_settle(e(1.0, 0.97, 1.04), &within, 0.02, 10), Some(30));
+        // Four runs have no interval: two more give one.
+        assert_eq!(runs_to_settle(e(9.0, f64::NAN, f64::NAN), &faster, 1.0, 4), Some(2));
     }
 }

@@ -408,8 +408,7 @@ fn summary_table(md: &mut String, rows: &Rows, spec: &ReportSpec) {
         let seeds: BTreeSet<&str> = group.iter().map(|r| r.text(column::seed)).collect();
         cells.push(seeds.len().to_string());
         cells.push(group.len().to_string());
-        let key = format!("{}|pooled", first.config_id());
-        let total = stats::median_ci(&pool::samples(group.iter().copied(), column::total_s), stats::seed_for(&key));
+        let total = stats::median_ci(&pool::samples(group.iter().copied(), column::total_s));
         cells.push(format!("{} [{}, {}]", num(total.value), num(total.lo), num(total.hi)));
         cells.push(num(stats::median(&pool::samples(group.iter().copied(), column::mrays_per_s))));
         if overhead {

@@ -150,7 +150,7 @@ pub fn ratio_against(
     if numerator.len() == denominator.len()
         && let Some(ratios) = paired_ratios(spec, runs, other, group, metric, numerator.len())
     {
-        return Some(stats::median_ci(&ratios, stats::seed_for(key)));
+        return Some(stats::median_ci(&ratios));
     }
     Some(stats::ratio_ci(&numerator, &denominator, stats::seed_for(key)))
 }
@@ -251,10 +251,9 @@ fn curves_with(
 
 /// Curves of `metric` against `x` for one series, each point pooled over seeds.
 pub fn metric_curves(runs: &[Run], series: &str, x: &str, metric: &str) -> Vec<Curve> {
-    curves_with(runs, series, x, |fixed, xv, group| {
+    curves_with(runs, series, x, |_, _, group| {
         let values = samples(group.iter().copied(), metric);
-        let key = format!("{series}|{fixed}|{x}={xv}|{metric}");
-        (!values.is_empty()).then(|| (stats::median_ci(&values, stats::seed_for(&key)), f64::NAN))
+        (!values.is_empty()).then(|| (stats::median_ci(&values), f64::NAN))
     })
 }
 
@@ -269,9 +268,8 @@ pub fn trade_off_curves(runs: &[Run], series: &str, x: &str, y: &str) -> Vec<Cur
             if xs.is_empty() || ys.is_empty() {
                 return None;
             }
-            let key = format!("{series}|{fixed}|{x}|{y}");
-            let x_median = stats::median_ci(&xs, stats::seed_for(&key)).value;
-            let estimate = stats::median_ci(&ys, stats::seed_for(&key));
+            let x_median = stats::median_ci(&xs).value;
+            let estimate = stats::median_ci(&ys);
             let point = Point {
                 x: x_median,
                 estimate,

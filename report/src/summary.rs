@@ -40,7 +40,7 @@ pub fn summarise(rows: &Rows, spec: &ReportSpec) -> PolarsResult<DataFrame> {
         let intervals: Vec<stats::Estimate> = ids
             .iter()
             .zip(&groups)
-            .map(|(id, group)| stats::median_ci(&pool::samples(group.iter().copied(), metric), stats::seed_for(id)))
+            .map(|(_, group)| stats::median_ci(&pool::samples(group.iter().copied(), metric)))
             .collect();
         frame.with_column(float_column(&format!("{metric}_median_lo"), intervals.iter().map(|e| Some(e.lo))))?;
         frame.with_column(float_column(&format!("{metric}_median_hi"), intervals.iter().map(|e| Some(e.hi))))?;

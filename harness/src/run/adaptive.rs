@@ -1,8 +1,9 @@
 //! Adaptive repetitions (`repetitions = "auto"`): a configuration stops being timed once the 95% interval of its
 //! median is narrow enough, as hyperfine's `--min-runs`/`--max-runs` and criterion's measurement time decide it.
 //!
-//! The interval is the report's (percentile bootstrap of the median, [`report::stats::median_ci`]) of the
-//! metric speedups are ratios of, so a configuration that stopped shows an interval at most the target wide.
+//! The interval is the report's (the median's distribution-free interval, [`report::stats::median_ci`]) of the
+//! metric speedups are ratios of, so a configuration that stopped shows an interval at most the target wide. No
+//! configuration stops before it has [`report::stats::MIN_SAMPLES_FOR_INTERVAL`] samples, whatever its minimum.
 
 use schema::column;
 use std::collections::HashMap;
@@ -38,14 +39,11 @@ pub fn recorded_value(row: &schema::Row, metric: &str) -> Option<f64> {
     deciding_phase(metric).and_then(|p| row.cell(p)).map(|c| c.number())
 }
 
-/// Relative width `(hi - lo) / median` of the 95% bootstrap interval of the median of `samples`; `None` for
-/// fewer than two samples. `key` seeds the resamples.
-pub fn interval_width(samples: &[f64], key: &str) -> Option<f64> {
-    if samples.len() < 2 {
-        return None;
-    }
-    let e = stats::median_ci(samples, stats::seed_for(key));
-    Some(if e.value > 0.0 { (e.hi - e.lo) / e.value } else { 0.0 })
+/// Relative width `(hi - lo) / median` of the 95% interval of the median of `samples`; `None` below
+/// [`stats::MIN_SAMPLES_FOR_INTERVAL`] samples, which have no interval.
+pub fn interval_width(samples: &[f64]) -> Option<f64> {
+    let e = stats::median_ci(samples);
+    e.lo.is_finite().then(|| if e.value > 0.0 { (e.hi - e.lo) / e.value } else { 0.0 })
 }
 
 /// Each configuration's samples so far, and whether it is done.
@@ -65,13 +63,13 @@ impl Sampler {
     }
 
     /// Records configuration `config`'s next repetition (`value`: its metric, `None` for a deterministic metric)
-    /// and returns the interval width after it. `key` identifies the configuration (its id).
-    pub fn record(&mut self, config: usize, key: &str, value: Option<f64>) -> Option<f64> {
+    /// and returns the interval width after it.
+    pub fn record(&mut self, config: usize, value: Option<f64>) -> Option<f64> {
         let samples = self.samples.entry(config).or_default();
         samples.push(value.unwrap_or(0.0));
         let n = samples.len() as u32;
         let width = match value {
-            Some(_) => interval_width(samples, key),
+            Some(_) => interval_width(samples),
             None => (n >= 2).then_some(0.0),
         };
         let done = match self.rule {
@@ -121,28 +119,38 @@ impl Sampler {
 mod tests {
     use super::*;
 
-    const AUTO: Repetitions = Repetitions::Auto { min: 3, max: 6, target_width: 0.03 };
+    const AUTO: Repetitions = Repetitions::Auto { min: 6, max: 9, target_width: 0.03 };
 
     #[test]
     fn quiet_samples_stop_at_the_minimum() {
         let mut s = Sampler::new(AUTO);
-        for (i, x) in [1.000, 1.001, 0.999].into_iter().enumerate() {
+        for (i, x) in [1.000, 1.001, 0.999, 1.0005, 0.9995, 1.0].into_iter().enumerate() {
             assert!(!s.is_done(0), "done after {i}");
-            s.record(0, "c", Some(x));
+            s.record(0, Some(x));
         }
         assert!(s.is_done(0));
         assert_eq!(s.expected_left(0), 0.0);
     }
 
     #[test]
+    fn no_configuration_stops_before_its_median_has_an_interval() {
+        let mut s = Sampler::new(Repetitions::Auto { min: 3, max: 20, target_width: 0.05 });
+        for i in 0..stats::MIN_SAMPLES_FOR_INTERVAL {
+            assert!(!s.is_done(0), "done after {i} identical samples");
+            assert_eq!(s.record(0, Some(1.0)).is_some(), i + 1 >= stats::MIN_SAMPLES_FOR_INTERVAL);
+        }
+        assert!(s.is_done(0));
+    }
+
+    #[test]
     fn noisy_samples_run_to_the_maximum() {
         let mut s = Sampler::new(AUTO);
-        for x in [1.0, 1.2, 0.9, 1.1, 0.8] {
-            s.record(0, "c", Some(x));
+        for x in [1.0, 1.2, 0.9, 1.1, 0.8, 1.15, 0.85, 1.05] {
+            s.record(0, Some(x));
             assert!(!s.is_done(0));
         }
         assert_eq!(s.expected_left(0), 1.0);
-        let width = s.record(0, "c", Some(1.3)).unwrap();
+        let width = s.record(0, Some(1.3)).unwrap();
         assert!(width > 0.03, "{width}");
         assert!(s.is_done(0), "stops at max_repetitions");
     }
@@ -153,39 +161,39 @@ mod tests {
         let xs = [1.0, 1.3, 1.0, 1.01, 0.99, 1.0, 1.02, 0.98, 1.0, 1.01, 0.99, 1.0, 1.0, 1.0, 1.0];
         let mut stopped = None;
         for (i, x) in xs.into_iter().enumerate() {
-            s.record(0, "c", Some(x));
+            s.record(0, Some(x));
             if s.is_done(0) {
                 stopped = Some(i + 1);
                 break;
             }
         }
         let n = stopped.expect("the interval narrows within 15 samples");
-        assert!((4..=15).contains(&n), "stopped after {n}");
+        assert!((7..=15).contains(&n), "stopped after {n}");
     }
 
     #[test]
     fn deterministic_metrics_stop_at_the_minimum_and_fixed_rules_at_their_count() {
         let mut s = Sampler::new(AUTO);
-        for _ in 0..3 {
+        for _ in 0..6 {
             assert!(!s.is_done(1));
             assert_eq!(timed_value(&Timing::untimed(0), "nodes_per_ray"), None);
-            s.record(1, "d", None);
+            s.record(1, None);
         }
         assert!(s.is_done(1));
         let mut f = Sampler::new(Repetitions::Fixed(2));
-        f.record(0, "e", Some(1.0));
+        f.record(0, Some(1.0));
         assert!(!f.is_done(0));
-        f.record(0, "e", Some(5.0));
+        f.record(0, Some(5.0));
         assert!(f.is_done(0));
     }
 
     #[test]
     fn expected_repetitions_follow_what_configurations_did() {
         let mut s = Sampler::new(AUTO);
-        assert_eq!(s.expected_left(0), 3.0 + 0.5 * 3.0, "before any configuration reached the minimum");
-        for x in [1.0, 1.0, 1.0] {
-            s.record(0, "a", Some(x));
+        assert_eq!(s.expected_left(0), 6.0 + 0.5 * 3.0, "before any configuration reached the minimum");
+        for x in [1.0; 6] {
+            s.record(0, Some(x));
         }
-        assert_eq!(s.expected_left(1), 3.0, "the one that reached the minimum stopped there");
+        assert_eq!(s.expected_left(1), 6.0, "the one that reached the minimum stopped there");
     }
 }

@@ -400,8 +400,7 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, existing: Existing) -> R
                     }
                     let mut recorded = row(&recording, c, rep, &timing, &v, started_run.clone());
                     recorded.repetition_rule = rule;
-                    recorded.interval_width =
-                        sweep.sampler.record(run.config, &c.id, adaptive::timed_value(&timing, metric));
+                    recorded.interval_width = sweep.sampler.record(run.config, adaptive::timed_value(&timing, metric));
                     // Rounding is idempotent: the rest of the row was rounded by `row` already.
                     let recorded = recorded.rounded();
                     append(&recorded)?;

@@ -75,12 +75,12 @@ impl<'a> Sweep<'a> {
             recorded.iter().filter_map(|r| index.get(r.config_id.as_str()).map(|&i| (i, r))).collect();
         resumed.sort_by_key(|(i, r)| (*i, r.repetition));
         for (i, r) in resumed {
-            let (c, metric) = (self.states[i].configuration, self.metric(self.states[i].configuration));
+            let metric = self.metric(self.states[i].configuration);
             let state = &mut self.states[i];
             if r.validation == schema::ValidationStatus::Failed {
                 state.failed = true;
             } else if state.pending.done.insert(r.repetition) {
-                self.sampler.record(i, &c.id, adaptive::recorded_value(r, metric));
+                self.sampler.record(i, adaptive::recorded_value(r, metric));
             }
         }
     }

@@ -316,7 +316,7 @@ fn validate_prints_runs_and_an_estimate() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.contains("configurations 162"), "{out}");
     assert!(
-        out.contains("runs           at most 810 recorded (auto: 3 to 5 repetitions each, until the median's 95% interval is within 5.0%)"),
+        out.contains("runs           at most 972 recorded (6 repetitions each) + 0 warm-ups, order interleaved"),
         "{out}"
     );
     assert!(out.contains("estimate       ~"), "{out}");
@@ -483,7 +483,7 @@ fn auto_repetitions_stop_when_the_interval_is_narrow_and_at_the_maximum_otherwis
     let cfg = dir.join("auto.toml");
     let run = |extra: &str, resume: bool| {
         let text = format!(
-            "name = \"auto\"\nrepetitions = \"auto\"\nmin_repetitions = 2\nmax_repetitions = 4\n{extra}\n[sweep]\n\
+            "name = \"auto\"\nrepetitions = \"auto\"\nmin_repetitions = 6\nmax_repetitions = 8\n{extra}\n[sweep]\n\
              accel = \"{flat}\"\nobjects = [50, 60]\nwidth = 32\nheight = 24\nworkload = \"primary\"\n"
         );
         std::fs::write(&cfg, text).unwrap();
@@ -501,30 +501,30 @@ fn auto_repetitions_stop_when_the_interval_is_narrow_and_at_the_maximum_otherwis
     // configuration stops at the minimum.
     let out = run("speedup_metric = \"nodes_per_ray\"", false);
     let runs = out.join("runs.csv");
-    assert_eq!(recorded(&runs).len(), 2 * 2, "2 configurations x min_repetitions");
-    assert!(column(&runs, "repetition_rule").iter().all(|r| r == "auto 2..4 width 0.03 nodes_per_ray"));
-    assert_eq!(column(&runs, "interval_width"), ["", "", "0.0", "0.0"]);
+    assert_eq!(recorded(&runs).len(), 2 * 6, "2 configurations x min_repetitions");
+    assert!(column(&runs, "repetition_rule").iter().all(|r| r == "auto 6..8 width 0.03 nodes_per_ray"));
+    assert_eq!(column(&runs, "interval_width"), [vec![""; 2], vec!["0.0"; 10]].concat());
     let report = std::fs::read_to_string(out.join("REPORT.md")).unwrap();
-    assert!(report.contains("2 of 2 configurations got there, 0 stopped at 4"), "{report}");
+    assert!(report.contains("2 of 2 configurations got there, 0 stopped at 8"), "{report}");
     // Killed after its first row: the resumed sweep records the rest and no more.
     keep_rows(&runs, 1);
     run("speedup_metric = \"nodes_per_ray\"", true);
-    assert_eq!(recorded(&runs).len(), 4);
+    assert_eq!(recorded(&runs).len(), 12);
 
     // A target no timing meets: every configuration runs to the maximum, and a resumed sweep counts the rows it
     // already has.
     let out = run("target_ci_width = 0.0001", false);
     let runs = out.join("runs.csv");
-    assert_eq!(recorded(&runs).len(), 2 * 4, "2 configurations x max_repetitions");
+    assert_eq!(recorded(&runs).len(), 2 * 8, "2 configurations x max_repetitions");
     let widths = column(&runs, "interval_width");
-    assert!(widths[2..].iter().all(|w| w.parse::<f64>().unwrap() > 0.0001), "{widths:?}");
+    assert!(widths[10..].iter().all(|w| w.parse::<f64>().unwrap() > 0.0001), "{widths:?}");
     keep_rows(&runs, 5);
     let before = recorded(&runs);
     run("target_ci_width = 0.0001", true);
     let after = recorded(&runs);
-    assert_eq!(after.len(), 8, "no row lost or added: {after:?}");
+    assert_eq!(after.len(), 16, "no row lost or added: {after:?}");
     assert_eq!(after[..5], before[..]);
-    assert_eq!(after.iter().collect::<HashSet<_>>().len(), 8, "no row duplicated");
+    assert_eq!(after.iter().collect::<HashSet<_>>().len(), 16, "no row duplicated");
 }
 
 #[test]
@@ -571,7 +571,7 @@ fn check_claims_exits_1_when_a_claim_fails() {
     let cfg = dir.join("claims.toml");
     std::fs::write(
         &cfg,
-        format!("name = \"claims\"\nrepetitions = 2\n[sweep]\nobjects = 300\nwidth = 48\nheight = 32\nworkload = \"primary\"\n\
+        format!("name = \"claims\"\nrepetitions = 6\n[sweep]\nobjects = 300\nwidth = 48\nheight = 32\nworkload = \"primary\"\n\
          [[series]]\nlabel = \"brute\"\naccel = \"{list}\"\n[[series]]\nlabel = \"tree\"\naccel = \"{flat}\"\n\
          [[claim]]\ntext = \"the list is 1000x faster than the BVH\"\nkind = \"faster\"\nseries = \"brute\"\nthan = \"tree\"\nfactor = 1000\n"),
     )

@@ -241,12 +241,7 @@ fn time_ratio(new: &[f64], old: &[f64], key: &str, min_effect: f64) -> Option<Ti
     } else {
         Verdict::Unchanged
     };
-    Some(TimeRatio {
-        old: stats::median_ci(old, stats::seed_for(&format!("{key}|old"))),
-        new: stats::median_ci(new, stats::seed_for(&format!("{key}|new"))),
-        ratio,
-        verdict,
-    })
+    Some(TimeRatio { old: stats::median_ci(old), new: stats::median_ci(new), ratio, verdict })
 }
 
 /// What the counter comparison found.
@@ -403,8 +398,8 @@ pub(crate) fn speedups(
                     pool::round_ratios(spec, old, reference, old_group, metric),
                 );
                 let (old_e, new_e, ratio, lo, hi) = if let (Some(r_new), Some(r_old)) = paired {
-                    let old_e = stats::median_ci(&r_old, stats::seed_for(&format!("{key}|old")));
-                    let new_e = stats::median_ci(&r_new, stats::seed_for(&format!("{key}|new")));
+                    let old_e = stats::median_ci(&r_old);
+                    let new_e = stats::median_ci(&r_new);
                     let change = stats::ratio_ci(&r_new, &r_old, stats::seed_for(&key));
                     (old_e, new_e, change.value, change.lo, change.hi)
                 } else {

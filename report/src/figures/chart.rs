@@ -473,11 +473,11 @@ where
         let colour = RGBColor(r, g, b);
         let stroke = colour.stroke_width(2);
         let shape = marker(line.style);
-        // 95% intervals: a vertical bar with caps at both ends.
-        cc.draw_series(line.points.iter().map(|p| PathElement::new([(p.x, p.lo), (p.x, p.hi)], stroke))).map_err(e)?;
+        // 95% intervals: a vertical bar with caps at both ends (none where too few runs give no interval).
+        let bounded = || line.points.iter().filter(|p| p.lo.is_finite() && p.hi.is_finite());
+        cc.draw_series(bounded().map(|p| PathElement::new([(p.x, p.lo), (p.x, p.hi)], stroke))).map_err(e)?;
         cc.draw_series(
-            line.points
-                .iter()
+            bounded()
                 .flat_map(|p| [(p.x, p.lo), (p.x, p.hi)])
                 .map(|at| EmptyElement::at(at) + PathElement::new([(-6, 0), (6, 0)], stroke)),
         )

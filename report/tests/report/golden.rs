@@ -128,8 +128,9 @@ fn golden_report() {
         assert_eq!(value(&summary, id, "total_s_min"), min, "{id}");
         assert_eq!(value(&summary, id, "total_s_max"), max, "{id}");
         assert!((value(&summary, id, "total_s_std") - std).abs() < 1e-12, "{id}");
+        // Three repetitions have no distribution-free 95% interval of their median.
         let (lo, hi) = (value(&summary, id, "total_s_median_lo"), value(&summary, id, "total_s_median_hi"));
-        assert!(min <= lo && lo <= median && median <= hi && hi <= max, "{id}: [{lo}, {hi}]");
+        assert!(lo.is_nan() && hi.is_nan(), "{id}: [{lo}, {hi}]");
     }
     // bvh build_s is 0.0625 in every repetition, so trace_s = total_s - 0.0625.
     assert_eq!(value(&summary, bvh10, "trace_s_median"), 0.25);
@@ -139,8 +140,9 @@ fn golden_report() {
     assert_eq!(value(&summary, list10, "speedup"), 1.0);
     assert_eq!(value(&summary, bvh10, "speedup"), 1.25 / 0.3125);
     assert_eq!(value(&summary, bvh100, "speedup"), 11.0 / 2.5);
+    // One configuration's three repetitions: no interval; the claims below pool two seeds (six rounds) and get one.
     let (lo, hi) = (value(&summary, bvh100, "speedup_lo"), value(&summary, bvh100, "speedup_hi"));
-    assert!((10.0 / 3.0..=11.0 / 2.5).contains(&lo) && (11.0 / 2.5..=12.0 / 2.0).contains(&hi), "[{lo}, {hi}]");
+    assert!(lo.is_nan() && hi.is_nan(), "[{lo}, {hi}]");
 
     // Claims.
     let verdicts: Vec<Verdict> = outcome.claims.iter().map(|c| c.verdict).collect();
@@ -204,7 +206,7 @@ fn golden_report() {
         "**fails**",
         "| inconclusive |",
         "### Claims point by point\n\n**BVH is at least 2× faster than the list**\n\n| point | ratio [95% CI] | threshold | verdict |",
-        "| 100 objects | 4.200 [3.857, 4.700] | ≥ 2 | holds |",
+        "| 100 objects | 4.200 [3.714, 5.000] | ≥ 2 | holds |", // six rounds: the range of their ratios
         "| 10 objects | 4.000 [4.000, 4.000] | 1 ± 0.1 | **fails** |",
         "## Summary",
         "```toml\nname = \"golden\"",
@@ -242,7 +244,10 @@ fn row_order_does_not_change_the_numbers() {
         for (column, text) in row {
             let other = &sb[id][column];
             match (text.parse::<f64>(), other.parse::<f64>()) {
-                (Ok(x), Ok(y)) => assert!((x - y).abs() <= 1e-12 * x.abs().max(y.abs()), "{id} {column}: {x} vs {y}"),
+                (Ok(x), Ok(y)) => assert!(
+                    (x.is_nan() && y.is_nan()) || (x - y).abs() <= 1e-12 * x.abs().max(y.abs()),
+                    "{id} {column}: {x} vs {y}"
+                ),
                 _ => assert_eq!(text, other, "{id} {column}"),
             }
         }
