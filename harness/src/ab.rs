@@ -1,7 +1,7 @@
 //! `harness ab`: the trustworthy comparison on a noisy machine. Builds another git revision, then times every
 //! configuration with both builds in one job, interleaved (A B, then B A, round after round), each run in a
-//! fresh `harness worker` process, and reports each configuration's time ratio new/old with a 95% bootstrap
-//! interval. Both builds must give the same answers, run after run. A configuration the base revision cannot run
+//! fresh `harness worker` process, and reports each configuration's time ratio new/old: the median of the per-round
+//! ratios with its distribution-free 95% interval ([`report::stats::paired_ratio_ci`]). Both builds must give the same answers, run after run. A configuration the base revision cannot run
 //! (a setting newer than it, or a request its worker refuses) is skipped and listed.
 //!
 //! The base revision is built in a fresh git worktree under `target/ab/`, by cargo, into the target folder of
@@ -608,7 +608,7 @@ pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
     }
     say!("## A/B: {} (new, this build) against {} (old, {})\n", exp.name, &rev[..12], request.base);
     say!(
-        "Trace time per configuration, new / old (below 1: faster), 95% bootstrap interval; {} rounds, interleaved. \
+        "Trace time per configuration, new / old (below 1: faster), the median of per-round ratios with its 95% interval; {} rounds, interleaved. \
          A single-thread configuration flagged as slower is measured again the same way and fails only if that \
          agrees.\n",
         exp.repetitions.max()

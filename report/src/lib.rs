@@ -3,8 +3,9 @@
 //!
 //! Stages: [`rows`] reads the CSV with polars; [`summary`] aggregates per configuration; [`pool`]
 //! pools samples into points (seeds pooled) and matches series against each other; [`claims`] and
-//! the figures work on those points; [`markdown`] writes REPORT.md. All intervals are 95%
-//! percentile-bootstrap intervals from [`stats`], seeded from fixed keys so reports are reproducible.
+//! the figures work on those points; [`markdown`] writes REPORT.md. Intervals come from [`stats`]: the
+//! median's distribution-free 95% interval, and a bootstrap seeded from fixed keys for a ratio of two independent
+//! medians, so reports are reproducible.
 
 pub mod check;
 pub mod history;

@@ -128,8 +128,10 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     let _ =
         writeln!(md, "- Time: {} to {}", stamps.first().copied().unwrap_or("?"), stamps.last().copied().unwrap_or("?"));
     md.push_str(
-        "- Statistics: medians over repetitions (and seeds where pooled); intervals are 95% percentile-bootstrap \
-         intervals of the median (or of the ratio of medians), 2000 resamples\n\n",
+        "- Statistics: medians over repetitions (and seeds where pooled); intervals are the median's distribution-free \
+         95% interval (order statistics; none below 6 values, shown as —), for a ratio of two series that ran in the \
+         same rounds that of the median of their per-round ratios, else a 95% percentile bootstrap (2000 resamples) \
+         of the ratio of medians\n\n",
     );
     let over = runs.iter().filter(|r| r.num(column::threads) > r.num(column::logical_cores)).count();
     if over > 0 {

@@ -13,7 +13,7 @@ use schema::column;
 pub struct Point {
     /// The x value.
     pub x: f64,
-    /// Median (or ratio of medians) with its 95% bootstrap interval.
+    /// Median (or ratio of medians) with its 95% interval.
     pub estimate: Estimate,
     /// Largest `threads` among the point's runs of the series itself.
     pub threads: f64,
@@ -130,7 +130,7 @@ fn paired_ratios(
 
 /// `metric(other) / metric(group)` at one point, with its interval; `None` when there is no counterpart or no
 /// sample. Where the two series ran in the same rounds (every run has one counterpart of the same repetition,
-/// see [`rounds`]) it is the median of the per-round ratios, its interval resampling rounds (as
+/// see [`rounds`]) it is the median of the per-round ratios with its distribution-free interval (as
 /// [`stats::paired_ratio_ci`]); otherwise the ratio of the two medians, each side resampled on its own
 /// ([`stats::ratio_ci`]). `key` seeds the bootstrap.
 pub fn ratio_against(

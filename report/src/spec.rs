@@ -49,7 +49,7 @@ pub fn speedup_metric<'a>(configured: Option<&'a str>, workload: &str) -> &'a st
 /// What a figure's y axis shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PlotKind {
-    /// The metric itself (median over repetitions and seeds, 95% bootstrap interval as error bars).
+    /// The metric itself (median over repetitions and seeds, 95% interval as error bars).
     Metric,
     /// Reference series' metric divided by each series' metric (a speedup when the metric is a time).
     Speedup,

@@ -1,5 +1,5 @@
 //! Per-configuration summaries (`summary.csv`, `summary.parquet`): polars aggregates each
-//! configuration's repetitions; bootstrap intervals and speedups are added from the plain samples.
+//! configuration's repetitions; 95% intervals and speedups are added from the plain samples.
 
 use polars_core::prelude::*;
 use schema::column;

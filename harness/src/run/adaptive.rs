@@ -2,8 +2,11 @@
 //! median is narrow enough, as hyperfine's `--min-runs`/`--max-runs` and criterion's measurement time decide it.
 //!
 //! The interval is the report's (the median's distribution-free interval, [`report::stats::median_ci`]) of the
-//! metric speedups are ratios of, so a configuration that stopped shows an interval at most the target wide. No
-//! configuration stops before it has [`report::stats::MIN_SAMPLES_FOR_INTERVAL`] samples, whatever its minimum.
+//! metric speedups are ratios of. With interleaved rounds a configuration is decided by what its claims and
+//! speedups use: the median of its per-round ratios to the reference series' configuration at its point (which
+//! goes on while any configuration paired with it does); otherwise, and for the reference, by its own median. So
+//! a configuration that stopped shows an interval at most the target wide. No configuration stops before it has
+//! [`report::stats::MIN_SAMPLES_FOR_INTERVAL`] samples, whatever its minimum.
 
 use schema::column;
 use std::collections::HashMap;
@@ -49,46 +52,83 @@ pub fn interval_width(samples: &[f64]) -> Option<f64> {
 /// Each configuration's samples so far, and whether it is done.
 pub struct Sampler {
     rule: Repetitions,
+    /// Each configuration's reference (the reference series' configuration at its point), when its rounds pair
+    /// with it: the configuration is then decided by the interval of its per-round ratios to the reference.
+    reference: Vec<Option<usize>>,
     samples: HashMap<usize, Vec<f64>>,
-    done: HashMap<usize, bool>,
+    /// Configurations whose metric is a counter (the same every time).
+    deterministic: HashMap<usize, bool>,
     /// Configurations that reached the minimum, and those of them that went past it.
     reached_min: usize,
     went_on: usize,
 }
 
 impl Sampler {
-    /// No samples yet.
-    pub fn new(rule: Repetitions) -> Self {
-        Self { rule, samples: HashMap::new(), done: HashMap::new(), reached_min: 0, went_on: 0 }
+    /// No samples yet; `reference[c]` is configuration `c`'s paired reference, if any (see [`Sampler::paired`]).
+    pub fn new(rule: Repetitions, reference: Vec<Option<usize>>) -> Self {
+        Self { rule, reference, samples: HashMap::new(), deterministic: HashMap::new(), reached_min: 0, went_on: 0 }
+    }
+
+    /// Each configuration's reference for [`Sampler::new`]: with interleaved rounds, the one configuration of the
+    /// `reference` series at the same point (`points[c]`, `series[c]`), none for the reference itself or where
+    /// the point has not exactly one.
+    pub fn paired(points: &[usize], series: &[&str], reference: Option<&str>) -> Vec<Option<usize>> {
+        (0..points.len())
+            .map(|c| {
+                let reference = reference.filter(|r| series[c] != *r)?;
+                let mut at_point = (0..points.len()).filter(|&r| points[r] == points[c] && series[r] == reference);
+                match (at_point.next(), at_point.next()) {
+                    (Some(r), None) => Some(r),
+                    _ => None,
+                }
+            })
+            .collect()
     }
 
     /// Records configuration `config`'s next repetition (`value`: its metric, `None` for a deterministic metric)
-    /// and returns the interval width after it.
+    /// and returns the interval width that decides it after it.
     pub fn record(&mut self, config: usize, value: Option<f64>) -> Option<f64> {
-        let samples = self.samples.entry(config).or_default();
-        samples.push(value.unwrap_or(0.0));
-        let n = samples.len() as u32;
-        let width = match value {
-            Some(_) => interval_width(samples),
-            None => (n >= 2).then_some(0.0),
-        };
-        let done = match self.rule {
-            Repetitions::Fixed(reps) => n >= reps,
-            Repetitions::Auto { min, max, target_width } => {
-                n >= max || (n >= min && width.is_some_and(|w| w <= target_width))
-            }
-        };
-        self.done.insert(config, done);
-        if n == self.rule.min() {
+        self.samples.entry(config).or_default().push(value.unwrap_or(0.0));
+        self.deterministic.insert(config, value.is_none());
+        if self.count(config) == self.rule.min() {
             self.reached_min += 1;
-            self.went_on += usize::from(!done);
+            self.went_on += usize::from(!self.is_done(config));
         }
-        width
+        self.width(config)
     }
 
-    /// True once `config` needs no more repetitions.
+    /// The relative width of the interval that decides `config`: of the median of its per-round ratios to its
+    /// reference where it has one that is timed, else of its own median; 0 for a counter from two samples on.
+    pub fn width(&self, config: usize) -> Option<f64> {
+        let own = self.samples.get(&config)?;
+        if self.deterministic.get(&config) == Some(&true) {
+            return (own.len() >= 2).then_some(0.0);
+        }
+        let reference = self.reference.get(config).copied().flatten();
+        match reference.and_then(|r| self.samples.get(&r).filter(|_| self.deterministic.get(&r) == Some(&false))) {
+            Some(theirs) => {
+                let ratios: Vec<f64> = own.iter().zip(theirs).map(|(a, b)| a / b).collect();
+                interval_width(&ratios)
+            }
+            None => interval_width(own),
+        }
+    }
+
+    /// True once `config` needs no more repetitions: its count, or (auto) the maximum, or the minimum with its
+    /// interval narrow enough — and a reference goes on while a configuration paired with it does.
     pub fn is_done(&self, config: usize) -> bool {
-        self.done.get(&config).copied().unwrap_or(false)
+        let n = self.count(config);
+        match self.rule {
+            Repetitions::Fixed(reps) => n >= reps,
+            Repetitions::Auto { min, max, target_width } => {
+                n >= max
+                    || (n >= min
+                        && self.width(config).is_some_and(|w| w <= target_width)
+                        && (0..self.reference.len())
+                            .filter(|&c| self.reference[c] == Some(config))
+                            .all(|c| self.is_done(c)))
+            }
+        }
     }
 
     /// Repetitions recorded for `config`.
@@ -123,7 +163,7 @@ mod tests {
 
     #[test]
     fn quiet_samples_stop_at_the_minimum() {
-        let mut s = Sampler::new(AUTO);
+        let mut s = Sampler::new(AUTO, vec![None, None]);
         for (i, x) in [1.000, 1.001, 0.999, 1.0005, 0.9995, 1.0].into_iter().enumerate() {
             assert!(!s.is_done(0), "done after {i}");
             s.record(0, Some(x));
@@ -134,7 +174,7 @@ mod tests {
 
     #[test]
     fn no_configuration_stops_before_its_median_has_an_interval() {
-        let mut s = Sampler::new(Repetitions::Auto { min: 3, max: 20, target_width: 0.05 });
+        let mut s = Sampler::new(Repetitions::Auto { min: 3, max: 20, target_width: 0.05 }, vec![None]);
         for i in 0..stats::MIN_SAMPLES_FOR_INTERVAL {
             assert!(!s.is_done(0), "done after {i} identical samples");
             assert_eq!(s.record(0, Some(1.0)).is_some(), i + 1 >= stats::MIN_SAMPLES_FOR_INTERVAL);
@@ -144,7 +184,7 @@ mod tests {
 
     #[test]
     fn noisy_samples_run_to_the_maximum() {
-        let mut s = Sampler::new(AUTO);
+        let mut s = Sampler::new(AUTO, vec![None, None]);
         for x in [1.0, 1.2, 0.9, 1.1, 0.8, 1.15, 0.85, 1.05] {
             s.record(0, Some(x));
             assert!(!s.is_done(0));
@@ -157,7 +197,7 @@ mod tests {
 
     #[test]
     fn a_noisy_start_goes_on_until_the_interval_narrows() {
-        let mut s = Sampler::new(Repetitions::Auto { min: 3, max: 20, target_width: 0.05 });
+        let mut s = Sampler::new(Repetitions::Auto { min: 3, max: 20, target_width: 0.05 }, vec![None]);
         let xs = [1.0, 1.3, 1.0, 1.01, 0.99, 1.0, 1.02, 0.98, 1.0, 1.01, 0.99, 1.0, 1.0, 1.0, 1.0];
         let mut stopped = None;
         for (i, x) in xs.into_iter().enumerate() {
@@ -172,15 +212,49 @@ mod tests {
     }
 
     #[test]
+    fn a_configuration_paired_with_its_reference_stops_on_its_ratio_and_the_reference_waits_for_it() {
+        // Configuration 1 is paired with reference 0; both swing by ±20% from round to round, together, so the
+        // ratio is 0.5 throughout; configuration 2 is noisy on its own and paired with nothing.
+        let reference = Sampler::paired(&[0, 0, 1], &["ref", "new", "new"], Some("ref"));
+        assert_eq!(reference, [None, Some(0), None]);
+        let mut s = Sampler::new(AUTO, reference);
+        let swings = [1.0, 1.2, 0.8, 1.1, 0.9, 1.0];
+        for (i, x) in swings.into_iter().enumerate() {
+            assert!(!s.is_done(1), "done after {i}");
+            s.record(0, Some(2.0 * x));
+            s.record(1, Some(x));
+            s.record(2, Some(x));
+        }
+        assert_eq!(s.width(1), Some(0.0), "the ratio is the same in every round");
+        assert!(s.width(2).unwrap() > 0.03 && s.width(0).unwrap() > 0.03);
+        assert!(s.is_done(1), "settled on its ratio at the minimum");
+        assert!(!s.is_done(2), "settles nothing by its own median");
+        assert!(!s.is_done(0), "its own median is as wide, so it goes on to the maximum");
+        for _ in 6..9 {
+            s.record(0, Some(2.0));
+            s.record(2, Some(1.0));
+        }
+        assert!(s.is_done(0) && s.is_done(2), "at the maximum");
+        // A reference that is quiet on its own still waits for a configuration paired with it.
+        let mut s = Sampler::new(AUTO, vec![None, Some(0)]);
+        for x in [1.0, 1.2, 0.8, 1.1, 0.9, 1.0] {
+            s.record(0, Some(1.0));
+            s.record(1, Some(x));
+        }
+        assert_eq!(s.width(0), Some(0.0));
+        assert!(!s.is_done(1) && !s.is_done(0));
+    }
+
+    #[test]
     fn deterministic_metrics_stop_at_the_minimum_and_fixed_rules_at_their_count() {
-        let mut s = Sampler::new(AUTO);
+        let mut s = Sampler::new(AUTO, vec![None, None]);
         for _ in 0..6 {
             assert!(!s.is_done(1));
             assert_eq!(timed_value(&Timing::untimed(0), "nodes_per_ray"), None);
             s.record(1, None);
         }
         assert!(s.is_done(1));
-        let mut f = Sampler::new(Repetitions::Fixed(2));
+        let mut f = Sampler::new(Repetitions::Fixed(2), vec![None]);
         f.record(0, Some(1.0));
         assert!(!f.is_done(0));
         f.record(0, Some(5.0));
@@ -189,7 +263,7 @@ mod tests {
 
     #[test]
     fn expected_repetitions_follow_what_configurations_did() {
-        let mut s = Sampler::new(AUTO);
+        let mut s = Sampler::new(AUTO, vec![None, None]);
         assert_eq!(s.expected_left(0), 6.0 + 0.5 * 3.0, "before any configuration reached the minimum");
         for x in [1.0; 6] {
             s.record(0, Some(x));

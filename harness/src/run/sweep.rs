@@ -53,7 +53,14 @@ impl<'a> Sweep<'a> {
                 pending: Pending::default(),
             })
             .collect();
-        Sweep { exp, states, sampler: Sampler::new(exp.repetitions) }
+        let reference = if exp.order == crate::config::RunOrder::Interleaved {
+            let points: Vec<usize> = plan.configurations.iter().map(|c| c.point).collect();
+            let series: Vec<&str> = plan.configurations.iter().map(|c| c.series.as_str()).collect();
+            Sampler::paired(&points, &series, exp.reference.as_deref())
+        } else {
+            vec![None; plan.configurations.len()]
+        };
+        Sweep { exp, states, sampler: Sampler::new(exp.repetitions, reference) }
     }
 
     /// The metric whose interval decides `c`'s repetitions.

@@ -81,7 +81,7 @@ pub fn body(exp: &Experiment, out_dir: &Path) -> Result<(String, Vec<PathBuf>), 
     html.push_str(&figures_html);
     html.push_str(
         "<h2 id=\"summary\">Summary</h2>\n<p>One row per configuration and machine, as <code>summary.csv</code> \
-                   (medians with their 95% bootstrap intervals); click a header to sort.</p>\n",
+                   (medians with their 95% intervals); click a header to sort.</p>\n",
     );
     html.push_str(&summary_table(&exp.summary));
     Ok((html, copied))
