@@ -125,6 +125,7 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     );
     validation_line(md, runs);
     overhead_line(md, runs);
+    steal_line(md, runs);
     let _ =
         writeln!(md, "- Time: {} to {}", stamps.first().copied().unwrap_or("?"), stamps.last().copied().unwrap_or("?"));
     md.push_str(
@@ -169,6 +170,26 @@ fn overhead_line(md: &mut String, runs: &[Run]) {
         num(lo),
         num(hi),
         num(stats::median(&per_ray))
+    );
+}
+
+/// How many timed samples saw the hypervisor take the CPU (`steal_s`), and how much: a recording where many did
+/// has wider intervals than the machine's resolution, and is worth recording again (nothing when none did).
+fn steal_line(md: &mut String, runs: &[Run]) {
+    let measured: Vec<f64> = runs.iter().map(|r| r.num(column::steal_s)).filter(|v| v.is_finite()).collect();
+    let stolen: Vec<f64> = measured.iter().copied().filter(|&v| v > 0.0).collect();
+    if stolen.is_empty() {
+        return;
+    }
+    let max = stolen.iter().copied().fold(0.0, f64::max);
+    let _ = writeln!(
+        md,
+        "- Hypervisor steal: {} of {} timed samples lost CPU time to other tenants (median {} s, max {} s among them; \
+         each was taken again up to 3 times, keeping the least); the rounds they fell in widen their points' intervals",
+        stolen.len(),
+        measured.len(),
+        num(stats::median(&stolen)),
+        num(max)
     );
 }
 

@@ -354,3 +354,28 @@ fn speedups_default_to_trace_time_for_ray_sets_and_say_so() {
     assert!(md.contains("speedup in trace_s vs serial·list [95% CI]"), "{md}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn samples_that_saw_steal_are_counted_in_the_report() {
+    let rows = golden_rows();
+    let mut lines = rows.lines();
+    let mut text = format!("{},steal_s\n", lines.next().unwrap());
+    for (i, line) in lines.enumerate() {
+        let steal = match i {
+            0 => "0.02",
+            1 => "0.3",
+            2 | 3 => "0.0",
+            _ => "",
+        };
+        text.push_str(&format!("{line},{steal}\n"));
+    }
+    let dir = run_dir("steal", &text);
+    report::write(&dir, &spec()).unwrap();
+    let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
+    assert!(md.contains("- Hypervisor steal: 2 of 4 timed samples lost CPU time"), "{md}");
+    assert!(md.contains("max 0.3000 s"), "{md}");
+    let quiet = run_dir("no-steal", &golden_rows());
+    report::write(&quiet, &spec()).unwrap();
+    assert!(!std::fs::read_to_string(quiet.join("REPORT.md")).unwrap().contains("Hypervisor steal"));
+    let _ = (std::fs::remove_dir_all(&dir), std::fs::remove_dir_all(&quiet));
+}
