@@ -128,7 +128,12 @@ fn write_report_with(dir: &Path, exp: &Experiment, notes: Vec<String>, warnings:
             Verdict::Fails => "FAILS",
             Verdict::Inconclusive => "inconclusive",
         };
-        say!("claim {verdict:<12} ratio {:.3} [{:.3}, {:.3}] vs {:.3}: {}", c.ratio, c.lo, c.hi, c.threshold, c.text);
+        let interval = if c.lo.is_nan() {
+            format!("(no interval: fewer than {} runs)", report::stats::MIN_SAMPLES_FOR_INTERVAL)
+        } else {
+            format!("[{:.3}, {:.3}]", c.lo, c.hi)
+        };
+        say!("claim {verdict:<12} ratio {:.3} {interval} vs {:.3}: {}", c.ratio, c.threshold, c.text);
     }
     say!("report: {}", dir.join("REPORT.md").display());
     Ok(outcome.claims.iter().any(|c| c.verdict == Verdict::Fails))
