@@ -128,11 +128,14 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     steal_line(md, runs);
     let _ =
         writeln!(md, "- Time: {} to {}", stamps.first().copied().unwrap_or("?"), stamps.last().copied().unwrap_or("?"));
-    md.push_str(
+    let _ = writeln!(
+        md,
         "- Statistics: medians over repetitions (and seeds where pooled); intervals are the median's distribution-free \
-         95% interval (order statistics; none below 6 values, shown as —), for a ratio of two series that ran in the \
-         same rounds that of the median of their per-round ratios, else a 95% percentile bootstrap (2000 resamples) \
-         of the ratio of medians\n\n",
+         95% interval (order statistics; none below {} values, shown as —), for a ratio of two series that ran in the \
+         same rounds that of the median of their per-round ratios, else a 95% percentile bootstrap ({} resamples) \
+         of the ratio of medians\n",
+        stats::MIN_SAMPLES_FOR_INTERVAL,
+        stats::RESAMPLES
     );
     let over = runs.iter().filter(|r| r.num(column::threads) > r.num(column::logical_cores)).count();
     if over > 0 {

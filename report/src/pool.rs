@@ -268,7 +268,7 @@ pub fn trade_off_curves(runs: &[Run], series: &str, x: &str, y: &str) -> Vec<Cur
             if xs.is_empty() || ys.is_empty() {
                 return None;
             }
-            let x_median = stats::median_ci(&xs).value;
+            let x_median = stats::median(&xs);
             let estimate = stats::median_ci(&ys);
             let point = Point {
                 x: x_median,

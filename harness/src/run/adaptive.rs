@@ -55,6 +55,8 @@ pub struct Sampler {
     /// Each configuration's reference (the reference series' configuration at its point), when its rounds pair
     /// with it: the configuration is then decided by the interval of its per-round ratios to the reference.
     reference: Vec<Option<usize>>,
+    /// The configurations paired with each reference (the inverse of `reference`).
+    partners: HashMap<usize, Vec<usize>>,
     samples: HashMap<usize, Vec<f64>>,
     /// Configurations whose metric is a counter (the same every time).
     deterministic: HashMap<usize, bool>,
@@ -66,22 +68,27 @@ pub struct Sampler {
 impl Sampler {
     /// No samples yet; `reference[c]` is configuration `c`'s paired reference, if any (see [`Sampler::paired`]).
     pub fn new(rule: Repetitions, reference: Vec<Option<usize>>) -> Self {
-        Self { rule, reference, samples: HashMap::new(), deterministic: HashMap::new(), reached_min: 0, went_on: 0 }
+        let mut partners: HashMap<usize, Vec<usize>> = HashMap::new();
+        for (c, r) in reference.iter().enumerate() {
+            if let Some(r) = r {
+                partners.entry(*r).or_default().push(c);
+            }
+        }
+        let (samples, deterministic) = (HashMap::new(), HashMap::new());
+        Self { rule, reference, partners, samples, deterministic, reached_min: 0, went_on: 0 }
     }
 
     /// Each configuration's reference for [`Sampler::new`]: with interleaved rounds, the one configuration of the
     /// `reference` series at the same point (`points[c]`, `series[c]`), none for the reference itself or where
     /// the point has not exactly one.
     pub fn paired(points: &[usize], series: &[&str], reference: Option<&str>) -> Vec<Option<usize>> {
+        // The reference's configurations by point: one, or `None` where it has several.
+        let mut at_point: HashMap<usize, Option<usize>> = HashMap::new();
+        for (c, &point) in points.iter().enumerate().filter(|&(c, _)| Some(series[c]) == reference) {
+            at_point.entry(point).and_modify(|r| *r = None).or_insert(Some(c));
+        }
         (0..points.len())
-            .map(|c| {
-                let reference = reference.filter(|r| series[c] != *r)?;
-                let mut at_point = (0..points.len()).filter(|&r| points[r] == points[c] && series[r] == reference);
-                match (at_point.next(), at_point.next()) {
-                    (Some(r), None) => Some(r),
-                    _ => None,
-                }
-            })
+            .map(|c| if Some(series[c]) == reference { None } else { at_point.get(&points[c]).copied().flatten() })
             .collect()
     }
 
@@ -124,9 +131,7 @@ impl Sampler {
                 n >= max
                     || (n >= min
                         && self.width(config).is_some_and(|w| w <= target_width)
-                        && (0..self.reference.len())
-                            .filter(|&c| self.reference[c] == Some(config))
-                            .all(|c| self.is_done(c)))
+                        && self.partners.get(&config).is_none_or(|p| p.iter().all(|&c| self.is_done(c))))
             }
         }
     }
