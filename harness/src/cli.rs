@@ -46,6 +46,9 @@ pub enum Command {
     Merge(MergeArgs),
     /// Compare the rows of two runs.csv files (or run folders), in any order; exit 1 when they differ.
     RowsDiff(RowsDiffArgs),
+    /// Re-run a committed result set from the commit its rows record (or with today's code), on this machine, into
+    /// RESULT_SET/reproductions/, and say whether each claim, time ratio and deterministic column reproduces.
+    Reproduce(ReproduceArgs),
     /// Track speedups over commits.
     #[command(subcommand)]
     History(HistoryCommand),
@@ -191,6 +194,33 @@ pub struct AbArgs {
     /// Fail on a configuration flagged as slower without measuring it again.
     #[arg(long)]
     pub no_confirm: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct ReproduceArgs {
+    /// The result set: a folder `harness run` wrote (runs.csv and experiment.toml), e.g. results/paper.
+    pub dir: PathBuf,
+    /// Which code runs it: the commit its rows record (`recorded`, built in a worktree as `ab` builds its base), or
+    /// the checkout's (`HEAD`).
+    #[arg(long, value_enum, default_value = "recorded")]
+    pub at: ReproduceAt,
+    /// Run the config's [quick] overrides (the points both ran are compared).
+    #[arg(long)]
+    pub quick: bool,
+    /// Where to write the new rows (default: DIR/reproductions/<date>-<machine_id>[-head][-quick]/, a new folder).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+/// `--at`: which code re-runs a result set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ReproduceAt {
+    /// The commit the rows record.
+    #[value(name = "recorded")]
+    Recorded,
+    /// The checkout's code.
+    #[value(name = "HEAD", alias = "head")]
+    Head,
 }
 
 #[derive(Subcommand, Debug)]

@@ -19,6 +19,7 @@ pub mod meshes;
 pub mod peers;
 mod plan;
 mod render;
+mod reproduce;
 mod revision;
 mod rows;
 pub mod run;
@@ -86,6 +87,7 @@ pub fn main() -> ExitCode {
         Command::Slurm(SlurmCommand::Submit(args)) => slurm::submit(&args),
         Command::Slurm(SlurmCommand::Resubmit { run_dir, dry_run }) => slurm::resubmit(&run_dir, dry_run),
         Command::Merge(args) => merge::run(&args.run_dir, args.allow_mixed_machines),
+        Command::Reproduce(args) => reproduce::run(&args),
         Command::RowsDiff(args) => rows::diff::run(&args.a, &args.b, args.ignore_timing),
         Command::Fetch(args) => match &args.name {
             Some(name) => meshes::fetch(name),

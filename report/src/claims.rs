@@ -44,6 +44,8 @@ pub struct PointResult {
     pub verdict: Verdict,
     /// Inconclusive points: about how many more runs of each series would settle it (see [`runs_to_settle`]).
     pub more_runs: Option<usize>,
+    /// The most worker threads either side used there (1: a one-thread point).
+    pub threads: f64,
 }
 
 /// Checks every claim of `spec` against the rows.
@@ -93,6 +95,7 @@ pub fn check(rows: &Rows, spec: &ReportSpec, claim: &ClaimSpec) -> ClaimResult {
                 threshold: j.threshold,
                 verdict: j.verdict,
                 more_runs,
+                threads: p.threads.max(p.reference_threads),
             })
             .collect(),
     }

@@ -16,6 +16,7 @@ mod error;
 pub(crate) mod figures;
 mod markdown;
 mod pool;
+pub mod reproduction;
 mod rows;
 pub mod site;
 pub mod stats;

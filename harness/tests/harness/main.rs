@@ -3,5 +3,6 @@
 mod cli;
 mod common;
 mod count;
+mod reproduce;
 mod site_browser;
 mod slurm;

@@ -11,6 +11,7 @@ use super::html::{escape, json_script, num};
 use crate::claims::{self, ClaimResult};
 use crate::error::Error;
 use crate::figures;
+use crate::reproduction::{self, Outcome, Reproduction};
 use crate::rows::{self, Rows, Run};
 use crate::spec::{ReportSpec, Verdict};
 use crate::summary;
@@ -25,6 +26,8 @@ pub struct Experiment {
     pub rows: Rows,
     pub claims: Vec<ClaimResult>,
     pub summary: DataFrame,
+    /// Its reproductions (`reproductions/<name>/reproduction.json`), by folder name.
+    pub reproductions: Vec<(String, Reproduction)>,
 }
 
 impl Experiment {
@@ -35,7 +38,8 @@ impl Experiment {
         let summary = summary::summarise(&rows, spec).map_err(|e| Error::read(&runs_csv, e))?;
         let claims = claims::check_all(&rows, spec);
         let name = dir.file_name().map_or_else(|| spec.name.clone(), |n| n.to_string_lossy().into_owned());
-        Ok(Experiment { dir: dir.into(), name, spec: spec.clone(), rows, claims, summary })
+        let reproductions = reproductions_of(dir)?;
+        Ok(Experiment { dir: dir.into(), name, spec: spec.clone(), rows, claims, summary, reproductions })
     }
 
     /// The page's file name.
@@ -52,6 +56,19 @@ impl Experiment {
     pub fn machines(&self) -> Vec<String> {
         crate::distinct(self.rows.runs.iter().map(Run::machine))
     }
+}
+
+/// The reproductions of the result set in `dir`, by folder name (a folder without a verdict is skipped: still
+/// running, or stopped).
+fn reproductions_of(dir: &Path) -> Result<Vec<(String, Reproduction)>, Error> {
+    let Ok(entries) = std::fs::read_dir(dir.join("reproductions")) else { return Ok(Vec::new()) };
+    let mut found: Vec<PathBuf> =
+        entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.join(reproduction::JSON).is_file()).collect();
+    found.sort();
+    found
+        .iter()
+        .map(|p| Ok((p.file_name().unwrap_or_default().to_string_lossy().into_owned(), Reproduction::read(p)?)))
+        .collect()
 }
 
 /// A verdict's word and CSS class.
@@ -77,6 +94,7 @@ pub fn body(exp: &Experiment, out_dir: &Path) -> Result<(String, Vec<PathBuf>), 
     html.push_str(&provenance(exp));
     html.push_str(&ratio_matrix(exp));
     html.push_str(&claims_table(&exp.claims));
+    html.push_str(&reproductions_section(&exp.reproductions));
     let (figures_html, copied) = figures_section(exp, out_dir)?;
     html.push_str(&figures_html);
     html.push_str(
@@ -168,6 +186,59 @@ fn ratio_matrix(exp: &Experiment) -> String {
         html.push_str("</tr>\n");
     }
     html.push_str("</tbody></table></div>\n");
+    html
+}
+
+/// Each reproduction's verdict and its claims, recorded against reproduced.
+fn reproductions_section(reproductions: &[(String, Reproduction)]) -> String {
+    if reproductions.is_empty() {
+        return String::new();
+    }
+    let badge = |o: Outcome| {
+        let class = match o {
+            Outcome::Reproduced => "holds",
+            Outcome::NotReproduced => "fails",
+            Outcome::NotComparable => "inconclusive",
+        };
+        format!("<span class=\"verdict {class}\">{}</span>", o.word())
+    };
+    let mut html = String::from(
+        "<h2 id=\"reproductions\">Reproductions</h2>\n<p>The result set re-run by <code>harness reproduce</code>: \
+         deterministic columns must be identical, time ratios within the harness's resolution or their intervals.</p>\n",
+    );
+    for (name, r) in reproductions {
+        let moved = r.points.iter().filter(|p| p.outcome == Outcome::NotReproduced).count();
+        html.push_str(&format!(
+            "<h3>{} {}</h3>\n<p>Recorded on {}; reproduced on {} ({}). {} configurations' deterministic columns \
+             compared, {} differences; {} of {} time ratios reproduced.</p>\n",
+            escape(name),
+            badge(r.outcome()),
+            escape(&r.recorded_origin.machines.join(", ")),
+            escape(&r.reproduced_origin.machines.join(", ")),
+            escape(&r.reproduced_origin.commits.iter().map(|c| &c[..c.len().min(12)]).collect::<Vec<_>>().join(", ")),
+            r.configurations_compared,
+            r.differences.len(),
+            r.points.len() - moved,
+            r.points.len()
+        ));
+        if !r.claims.is_empty() {
+            html.push_str(
+                "<table class=\"claims reproduction\"><thead><tr><th>outcome</th><th>claim</th><th>then</th><th>now</th>\
+                 <th>why</th></tr></thead><tbody>\n",
+            );
+            for c in &r.claims {
+                html.push_str(&format!(
+                    "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+                    badge(c.outcome),
+                    escape(&c.text),
+                    escape(&c.recorded),
+                    escape(&c.reproduced),
+                    escape(&c.reason)
+                ));
+            }
+            html.push_str("</tbody></table>\n");
+        }
+    }
     html
 }
 

@@ -1,0 +1,210 @@
+//! `harness reproduce results/NAME`: re-runs a committed result set from the commit its rows record (built as `ab`
+//! builds its base), or with today's code (`--at HEAD`), on this machine, into
+//! `results/NAME/reproductions/<date>-<machine_id>[-head][-quick]/`, and judges whether it reproduces
+//! ([`report::reproduction`]): deterministic columns identical, claims and time ratios within the resolution. The
+//! recorded rows are only read.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+use report::reproduction::{self, Outcome};
+
+use crate::ab::{Build, base_binary, git};
+use crate::cli::{ReproduceArgs, ReproduceAt};
+use crate::config::Experiment;
+use crate::error::Error;
+use crate::merge::read_log;
+use crate::run::{CONFIG_COPY, RUNS_CSV, provenance};
+
+/// The folder, under a result set, that holds its reproductions.
+pub const REPRODUCTIONS: &str = "reproductions";
+
+/// The one commit and machine a result set was recorded with.
+struct Origin {
+    commit: String,
+    machine: String,
+    /// Whether the tree had uncommitted changes (then no commit holds the code that recorded the rows).
+    dirty: bool,
+}
+
+/// Where a result set was recorded, or why it cannot be reproduced.
+fn recorded_origin(dir: &Path) -> Result<Origin, Error> {
+    let runs = dir.join(RUNS_CSV);
+    let rows = read_log(&runs)?;
+    if rows.is_empty() {
+        return Err(Error::Input(format!("{}: no rows recorded (allowed: a result set with rows)", runs.display())));
+    }
+    let commits = report_distinct(rows.iter().map(|r| r.git_commit.clone()));
+    let machines = report_distinct(rows.iter().map(|r| r.machine_id.clone()));
+    if commits.len() > 1 {
+        return Err(Error::Input(format!(
+            "{}: git_commit: the rows mix {} commits ({}): a result set reproduces from one (allowed: rows of one commit)",
+            runs.display(),
+            commits.len(),
+            commits.iter().map(|c| &c[..c.len().min(12)]).collect::<Vec<_>>().join(", ")
+        )));
+    }
+    if machines.len() > 1 {
+        return Err(Error::Input(format!(
+            "{}: machine_id: the rows mix {} machines ({}): their times cannot be one result (allowed: rows of one \
+             machine)",
+            runs.display(),
+            machines.len(),
+            machines.join(", ")
+        )));
+    }
+    Ok(Origin { commit: commits[0].clone(), machine: machines[0].clone(), dirty: rows.iter().any(|r| r.git_dirty) })
+}
+
+fn report_distinct(values: impl Iterator<Item = String>) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for v in values {
+        if !out.contains(&v) {
+            out.push(v);
+        }
+    }
+    out
+}
+
+/// A folder name not yet taken under `parent`: `name`, else `name-2`, `name-3`, …
+fn fresh(parent: &Path, name: &str) -> PathBuf {
+    (1..)
+        .map(|i| parent.join(if i == 1 { name.to_string() } else { format!("{name}-{i}") }))
+        .find(|p| !p.exists())
+        .expect("a free name")
+}
+
+/// `harness reproduce`.
+pub fn run(args: &ReproduceArgs) -> Result<(), Error> {
+    let dir = std::path::absolute(&args.dir).unwrap_or_else(|_| args.dir.clone());
+    let config = dir.join(CONFIG_COPY);
+    if !dir.join(RUNS_CSV).is_file() || !config.is_file() {
+        return Err(Error::Input(format!(
+            "{}: not a result set: it needs {RUNS_CSV} and {CONFIG_COPY} (allowed: a folder `harness run` wrote, e.g. \
+             results/paper)",
+            args.dir.display()
+        )));
+    }
+    let Origin { commit, machine, dirty } = recorded_origin(&dir)?;
+    let root = PathBuf::from(git(Path::new("."), &["rev-parse", "--show-toplevel"])?);
+    if args.at == ReproduceAt::Recorded {
+        let exists = Command::new("git")
+            .current_dir(&root)
+            .args(["cat-file", "-e", &format!("{commit}^{{commit}}")])
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success());
+        if !exists {
+            return Err(Error::Input(format!(
+                "{}: git_commit: {commit} is not a commit of this repository (allowed: a result set recorded at one \
+                 of its commits; fetch the history, e.g. `git fetch --unshallow`; `--at HEAD` runs today's code)",
+                dir.join(RUNS_CSV).display()
+            )));
+        }
+        if dirty {
+            return Err(Error::Input(format!(
+                "{}: git_dirty: the rows were recorded with uncommitted changes, so no commit holds their code \
+                 (allowed: rows of a clean tree; `--at HEAD` re-runs the config with today's code)",
+                dir.join(RUNS_CSV).display()
+            )));
+        }
+    }
+    // Today's reading of the config: its claims and series are what the two row sets are judged by.
+    let exp = Experiment::load(&config)?;
+    let exp = if args.quick { exp.quick() } else { exp };
+
+    let here = provenance::Provenance::collect();
+    let (binary, at) = match args.at {
+        ReproduceAt::Recorded => {
+            (base_binary(&root, &Build::running()?, &commit)?, format!("recorded commit {}", &commit[..12]))
+        }
+        ReproduceAt::Head => (
+            std::env::current_exe().map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?,
+            format!(
+                "HEAD ({}{})",
+                &here.git_commit[..here.git_commit.len().min(12)],
+                if here.git_dirty { ", with uncommitted changes" } else { "" }
+            ),
+        ),
+    };
+    let date = provenance::timestamp_now().chars().take(10).collect::<String>();
+    let name = format!(
+        "{date}-{}{}{}",
+        here.machine.machine_id,
+        if args.at == ReproduceAt::Head { "-head" } else { "" },
+        if args.quick { "-quick" } else { "" }
+    );
+    let out = match &args.out {
+        Some(out) => std::path::absolute(out).unwrap_or_else(|_| out.clone()),
+        None => fresh(&dir.join(REPRODUCTIONS), &name),
+    };
+    if out.join(RUNS_CSV).exists() {
+        return Err(Error::Input(format!(
+            "{}: --out already holds rows (allowed: a folder without {RUNS_CSV}; by default a new one is chosen)",
+            out.display()
+        )));
+    }
+    say!(
+        "reproduce: {} (recorded at {} on {machine}) with the harness of {at}, into {}",
+        args.dir.display(),
+        &commit[..12],
+        out.display()
+    );
+    let mut cmd = Command::new(&binary);
+    cmd.current_dir(&root).arg("run").arg(&config).arg("--out").arg(&out).stdin(Stdio::null());
+    if args.quick {
+        cmd.arg("--quick");
+    }
+    let status = cmd.status().map_err(|e| Error::Run(format!("{}: {e}", binary.display())))?;
+    if !status.success() {
+        return Err(Error::Run(format!(
+            "the harness of {at} could not run {} ({status}); nothing recorded was touched",
+            config.display()
+        )));
+    }
+
+    let spec = exp.report_spec(vec![]);
+    let result = reproduction::compare(&dir, &out, &spec).map_err(|e| Error::Run(e.to_string()))?;
+    let how = vec![
+        format!(
+            "command: `harness reproduce {}{}{}` on {}",
+            args.dir.display(),
+            if args.at == ReproduceAt::Head { " --at HEAD" } else { "" },
+            if args.quick { " --quick" } else { "" },
+            provenance::timestamp_now()
+        ),
+        format!(
+            "the harness of {at} ran `{}`{}",
+            config.display(),
+            if args.quick { " with its [quick] overrides" } else { "" }
+        ),
+    ];
+    reproduction::write(&out, &result, &args.dir.display().to_string(), &how).map_err(|e| Error::Run(e.to_string()))?;
+    for c in &result.claims {
+        say!("claim {:<15} {} (then {}, now {}): {}", c.outcome.word(), c.text, c.recorded, c.reproduced, c.reason);
+    }
+    say!(
+        "deterministic columns: {} configurations compared, {} differences{}",
+        result.configurations_compared,
+        result.differences.len(),
+        if result.not_comparable.is_empty() {
+            String::new()
+        } else {
+            format!("; not comparable: {}", result.not_comparable.join("; "))
+        }
+    );
+    for line in result.differences.iter().take(10) {
+        say!("  differs: {line}");
+    }
+    let moved = result.points.iter().filter(|p| p.outcome == Outcome::NotReproduced).count();
+    say!("time ratios: {} of {} reproduced, {moved} moved", result.points.len() - moved, result.points.len());
+    say!("reproduce: {}: {}", result.outcome().word(), out.join(reproduction::MARKDOWN).display());
+    match result.outcome() {
+        Outcome::NotReproduced => Err(Error::Run(format!(
+            "{} did not reproduce (see {})",
+            args.dir.display(),
+            out.join(reproduction::MARKDOWN).display()
+        ))),
+        _ => Ok(()),
+    }
+}
