@@ -210,6 +210,10 @@ pub struct ReproduceArgs {
     /// Where to write the new rows (default: DIR/reproductions/<date>-<machine_id>[-head][-quick]/, a new folder).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Judge claims and time ratios for information only: exit 1 only on a deterministic difference (CI, where two
+    /// runs minutes apart on a shared machine are not a timing experiment).
+    #[arg(long)]
+    pub timings_for_information: bool,
 }
 
 /// `--at`: which code re-runs a result set.

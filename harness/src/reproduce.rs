@@ -196,15 +196,27 @@ pub fn run(args: &ReproduceArgs) -> Result<(), Error> {
     for line in result.differences.iter().take(10) {
         say!("  differs: {line}");
     }
-    let moved = result.points.iter().filter(|p| p.outcome == Outcome::NotReproduced).count();
-    say!("time ratios: {} of {} reproduced, {moved} moved", result.points.len() - moved, result.points.len());
+    let count = |o: Outcome| result.points.iter().filter(|p| p.outcome == o).count();
+    say!(
+        "time ratios: {} of {} reproduced, {} moved, {} not comparable (no interval on one side)",
+        count(Outcome::Reproduced),
+        result.points.len(),
+        count(Outcome::NotReproduced),
+        count(Outcome::NotComparable)
+    );
     say!("reproduce: {}: {}", result.outcome().word(), out.join(reproduction::MARKDOWN).display());
-    match result.outcome() {
-        Outcome::NotReproduced => Err(Error::Run(format!(
-            "{} did not reproduce (see {})",
+    let failed = if args.timings_for_information {
+        !result.differences.is_empty()
+    } else {
+        result.outcome() == Outcome::NotReproduced
+    };
+    if failed {
+        return Err(Error::Run(format!(
+            "{} did not reproduce{} (see {})",
             args.dir.display(),
+            if args.timings_for_information { ": its deterministic columns differ" } else { "" },
             out.join(reproduction::MARKDOWN).display()
-        ))),
-        _ => Ok(()),
+        )));
     }
+    Ok(())
 }

@@ -264,14 +264,21 @@ fn plural(n: usize) -> &'static str {
     if n == 1 { "" } else { "s" }
 }
 
-/// Whether a ratio reproduced: it moved by at most `resolution`, or its two 95% intervals overlap.
+/// Whether a ratio reproduced: it moved by at most `resolution`, or its two 95% intervals overlap. Moved further
+/// where one side has no interval (fewer than [`crate::stats::MIN_SAMPLES_FOR_INTERVAL`] runs), noise and change
+/// cannot be told apart: not comparable.
 pub fn point_outcome(recorded: Estimate, reproduced: Estimate, resolution: f64) -> Outcome {
     if !recorded.value.is_finite() || !reproduced.value.is_finite() {
         return Outcome::NotComparable;
     }
-    let within = (reproduced.value / recorded.value - 1.0).abs() <= resolution;
+    if (reproduced.value / recorded.value - 1.0).abs() <= resolution {
+        return Outcome::Reproduced;
+    }
+    if [recorded.lo, recorded.hi, reproduced.lo, reproduced.hi].iter().any(|v| !v.is_finite()) {
+        return Outcome::NotComparable;
+    }
     let overlap = reproduced.lo <= recorded.hi && recorded.lo <= reproduced.hi;
-    if within || overlap { Outcome::Reproduced } else { Outcome::NotReproduced }
+    if overlap { Outcome::Reproduced } else { Outcome::NotReproduced }
 }
 
 fn compare_points(spec: &ReportSpec, old: &Rows, new: &Rows) -> Vec<PointOutcome> {
@@ -367,11 +374,13 @@ pub fn compare_claims(recorded: &[ClaimResult], reproduced: &[ClaimResult]) -> V
             }
             let then = verdict_over(&pairs.iter().map(|(a, _)| *a).collect::<Vec<_>>());
             let now = verdict_over(&pairs.iter().map(|(_, b)| *b).collect::<Vec<_>>());
-            let moved: Vec<String> = pairs
-                .iter()
-                .filter(|(a, b)| {
-                    point_outcome(estimate(a), estimate(b), resolution(a.threads)) == Outcome::NotReproduced
-                })
+            let judged = |want: Outcome| {
+                pairs
+                    .iter()
+                    .filter(move |(a, b)| point_outcome(estimate(a), estimate(b), resolution(a.threads)) == want)
+            };
+            let unjudged = judged(Outcome::NotComparable).count();
+            let moved: Vec<String> = judged(Outcome::NotReproduced)
                 .map(|(a, b)| {
                     format!(
                         "{} {:.3} [{:.3}, {:.3}] then, {:.3} [{:.3}, {:.3}] now",
@@ -395,6 +404,15 @@ pub fn compare_claims(recorded: &[ClaimResult], reproduced: &[ClaimResult]) -> V
                         "{} of {counted} moved beyond the resolution and both intervals: {}",
                         moved.len(),
                         moved.join("; ")
+                    ),
+                )
+            } else if unjudged > 0 {
+                (
+                    Outcome::NotComparable,
+                    format!(
+                        "{unjudged} of {counted} moved beyond the resolution without an interval to judge them by \
+                         (fewer than {} runs on one side)",
+                        crate::stats::MIN_SAMPLES_FOR_INTERVAL
                     ),
                 )
             } else if then == now {
@@ -496,9 +514,11 @@ pub fn markdown(r: &Reproduction, title: &str, how: &[String]) -> String {
     }
     if let Some(reference) = &r.reference {
         md.push_str(&format!(
-            "\n## Times against {reference}\n\n{} of {} ratios reproduced. ",
+            "\n## Times against {reference}\n\n{} of {} ratios reproduced; {} moved beyond the resolution without an \
+             interval on one side to judge them by (not comparable). ",
             points(Outcome::Reproduced),
-            r.points.len()
+            r.points.len(),
+            points(Outcome::NotComparable)
         ));
         let moved: Vec<&PointOutcome> = r.points.iter().filter(|p| p.outcome == Outcome::NotReproduced).collect();
         if moved.is_empty() {
@@ -561,6 +581,10 @@ mod tests {
         assert_eq!(point_outcome(e(1.10, 1.00, 1.20), e(1.30, 1.15, 1.40), 0.02), Outcome::Reproduced);
         assert_eq!(point_outcome(e(1.10, 1.08, 1.12), e(1.20, 1.18, 1.22), 0.04), Outcome::NotReproduced);
         assert_eq!(point_outcome(e(f64::NAN, 1.0, 1.0), e(1.0, 1.0, 1.0), 0.02), Outcome::NotComparable);
+        // Without an interval on one side: within the resolution still reproduces, beyond it cannot be judged.
+        let none = |v| e(v, f64::NAN, f64::NAN);
+        assert_eq!(point_outcome(none(1.0), e(1.01, 1.0, 1.02), 0.02), Outcome::Reproduced);
+        assert_eq!(point_outcome(none(1.0), e(1.5, 1.4, 1.6), 0.02), Outcome::NotComparable);
     }
 
     #[test]
