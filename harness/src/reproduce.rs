@@ -34,14 +34,14 @@ fn recorded_origin(dir: &Path) -> Result<Origin, Error> {
     if rows.is_empty() {
         return Err(Error::Input(format!("{}: no rows recorded (allowed: a result set with rows)", runs.display())));
     }
-    let commits = report_distinct(rows.iter().map(|r| r.git_commit.clone()));
-    let machines = report_distinct(rows.iter().map(|r| r.machine_id.clone()));
+    let commits = distinct(rows.iter().map(|r| r.git_commit.clone()));
+    let machines = distinct(rows.iter().map(|r| r.machine_id.clone()));
     if commits.len() > 1 {
         return Err(Error::Input(format!(
             "{}: git_commit: the rows mix {} commits ({}): a result set reproduces from one (allowed: rows of one commit)",
             runs.display(),
             commits.len(),
-            commits.iter().map(|c| &c[..c.len().min(12)]).collect::<Vec<_>>().join(", ")
+            commits.iter().map(|c| short(c)).collect::<Vec<_>>().join(", ")
         )));
     }
     if machines.len() > 1 {
@@ -56,7 +56,8 @@ fn recorded_origin(dir: &Path) -> Result<Origin, Error> {
     Ok(Origin { commit: commits[0].clone(), machine: machines[0].clone(), dirty: rows.iter().any(|r| r.git_dirty) })
 }
 
-fn report_distinct(values: impl Iterator<Item = String>) -> Vec<String> {
+/// The distinct values, in order of appearance.
+fn distinct(values: impl Iterator<Item = String>) -> Vec<String> {
     let mut out: Vec<String> = Vec::new();
     for v in values {
         if !out.contains(&v) {
@@ -64,6 +65,11 @@ fn report_distinct(values: impl Iterator<Item = String>) -> Vec<String> {
         }
     }
     out
+}
+
+/// A commit's first 12 digits (all of a shorter text, e.g. `unknown`).
+fn short(commit: &str) -> &str {
+    &commit[..commit.len().min(12)]
 }
 
 /// A folder name not yet taken under `parent`: `name`, else `name-2`, `name-3`, …
@@ -116,13 +122,13 @@ pub fn run(args: &ReproduceArgs) -> Result<(), Error> {
     let here = provenance::Provenance::collect();
     let (binary, at) = match args.at {
         ReproduceAt::Recorded => {
-            (base_binary(&root, &Build::running()?, &commit)?, format!("recorded commit {}", &commit[..12]))
+            (base_binary(&root, &Build::running()?, &commit)?, format!("recorded commit {}", short(&commit)))
         }
         ReproduceAt::Head => (
             std::env::current_exe().map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?,
             format!(
                 "HEAD ({}{})",
-                &here.git_commit[..here.git_commit.len().min(12)],
+                short(&here.git_commit),
                 if here.git_dirty { ", with uncommitted changes" } else { "" }
             ),
         ),
@@ -147,7 +153,7 @@ pub fn run(args: &ReproduceArgs) -> Result<(), Error> {
     say!(
         "reproduce: {} (recorded at {} on {machine}) with the harness of {at}, into {}",
         args.dir.display(),
-        &commit[..12],
+        short(&commit),
         out.display()
     );
     let mut cmd = Command::new(&binary);

@@ -182,6 +182,30 @@ mod tests {
     }
 
     #[test]
+    fn an_experiment_page_shows_each_reproduction_with_its_verdict() {
+        let root = results("reproduction");
+        let dir = root.join("one");
+        let mut spec = spec(&dir);
+        spec.reference = Some(spec.series[0].clone());
+        // The rows against themselves: every deterministic column identical, every ratio where it was.
+        let found = crate::reproduction::compare(&dir, &dir, &spec).unwrap();
+        assert!(found.differences.is_empty() && found.configurations_compared > 0, "{found:?}");
+        assert_eq!(found.outcome(), crate::reproduction::Outcome::Reproduced);
+        let at = dir.join("reproductions").join("2026-12-04-abc");
+        std::fs::create_dir_all(&at).unwrap();
+        crate::reproduction::write(&at, &found, "results/one", &["a test".into()]).unwrap();
+        let md = std::fs::read_to_string(at.join(crate::reproduction::MARKDOWN)).unwrap();
+        assert!(md.contains("**reproduced**") && md.contains("every compared column identical"), "{md}");
+
+        let exp = Experiment::read(&dir, &spec).unwrap();
+        let (page, _) = experiment::body(&exp, &root.join("site")).unwrap();
+        let section = page.find("id=\"reproductions\"").expect("a reproductions section");
+        assert!(section > page.find("id=\"claims\"").unwrap() && section < page.find("id=\"summary\"").unwrap());
+        assert!(page[section..].contains("2026-12-04-abc <span class=\"verdict holds\">reproduced</span>"), "{page}");
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[test]
     fn an_experiment_page_leads_with_the_ratio_matrix_against_its_reference() {
         let root = results("matrix");
         let dir = root.join("one");
