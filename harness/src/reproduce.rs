@@ -16,9 +16,6 @@ use crate::error::Error;
 use crate::merge::read_log;
 use crate::run::{CONFIG_COPY, RUNS_CSV, provenance};
 
-/// The folder, under a result set, that holds its reproductions.
-pub const REPRODUCTIONS: &str = "reproductions";
-
 /// The one commit and machine a result set was recorded with.
 struct Origin {
     commit: String,
@@ -142,7 +139,7 @@ pub fn run(args: &ReproduceArgs) -> Result<(), Error> {
     );
     let out = match &args.out {
         Some(out) => std::path::absolute(out).unwrap_or_else(|_| out.clone()),
-        None => fresh(&dir.join(REPRODUCTIONS), &name),
+        None => fresh(&dir.join(reproduction::FOLDER), &name),
     };
     if out.join(RUNS_CSV).exists() {
         return Err(Error::Input(format!(
@@ -186,6 +183,10 @@ pub fn run(args: &ReproduceArgs) -> Result<(), Error> {
         ),
     ];
     reproduction::write(&out, &result, &args.dir.display().to_string(), &how).map_err(|e| Error::Run(e.to_string()))?;
+    // The result set's report lists its reproductions (its rows stay as they were).
+    if dir.join("REPORT.md").is_file() {
+        reproduction::update_report(&dir).map_err(|e| Error::Run(e.to_string()))?;
+    }
     for c in &result.claims {
         say!("claim {:<15} {} (then {}, now {}): {}", c.outcome.word(), c.text, c.recorded, c.reproduced, c.reason);
     }

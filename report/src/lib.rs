@@ -74,7 +74,8 @@ pub fn write(dir: &Path, spec: &ReportSpec) -> Result<Outcome, Error> {
     files.extend(figures::draw_all(dir, &rows, spec)?);
 
     let report = dir.join("REPORT.md");
-    std::fs::write(&report, markdown::report(&rows, spec, &claims)).map_err(|e| Error::write(&report, e))?;
+    let text = markdown::report(&rows, spec, &claims) + &reproduction::report_section(dir)?;
+    std::fs::write(&report, text).map_err(|e| Error::write(&report, e))?;
     files.push(report);
     Ok(Outcome { claims, files })
 }

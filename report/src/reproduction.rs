@@ -541,6 +541,105 @@ pub fn markdown(r: &Reproduction, title: &str, how: &[String]) -> String {
     md
 }
 
+/// The folder, under a result set, that holds its reproductions.
+pub const FOLDER: &str = "reproductions";
+
+/// The heading of REPORT.md's section on the result set's reproductions.
+const SECTION: &str = "## Reproductions";
+
+/// The reproductions of the result set in `dir` (`reproductions/<name>/reproduction.json`), by folder name; a folder
+/// without a verdict (still running, or stopped) is left out.
+pub fn read_all(dir: &Path) -> Result<Vec<(String, Reproduction)>, Error> {
+    let Ok(entries) = std::fs::read_dir(dir.join(FOLDER)) else { return Ok(Vec::new()) };
+    let mut found: Vec<std::path::PathBuf> =
+        entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.join(JSON).is_file()).collect();
+    found.sort();
+    found
+        .iter()
+        .map(|p| Ok((p.file_name().unwrap_or_default().to_string_lossy().into_owned(), Reproduction::read(p)?)))
+        .collect()
+}
+
+/// REPORT.md's section on the reproductions of the result set in `dir`: one line each, then every claim's outcome
+/// in each (empty when there are none).
+pub fn report_section(dir: &Path) -> Result<String, Error> {
+    let all = read_all(dir)?;
+    if all.is_empty() {
+        return Ok(String::new());
+    }
+    let mut md = format!(
+        "{SECTION}\n\nRe-runs of this result set by `harness reproduce` (docs/reproduction.md), each in \
+         `{FOLDER}/<name>/` with its rows, report and `{MARKDOWN}`.\n\n| reproduction | code | machine | verdict | \
+         claims reproduced / not / not comparable | deterministic differences | time ratios reproduced |\n\
+         |---|---|---|---|---|---|---|\n"
+    );
+    for (name, r) in &all {
+        let claims = |o: Outcome| r.claims.iter().filter(|c| c.outcome == o).count();
+        let commits: Vec<&str> = r.reproduced_origin.commits.iter().map(|c| &c[..c.len().min(12)]).collect();
+        md.push_str(&format!(
+            "| [{name}]({FOLDER}/{name}/{MARKDOWN}) | {} | {} | **{}** | {} / {} / {} | {} of {} configurations | {} of {} |\n",
+            commits.join(", "),
+            r.reproduced_origin.machines.join(", "),
+            r.outcome().word(),
+            claims(Outcome::Reproduced),
+            claims(Outcome::NotReproduced),
+            claims(Outcome::NotComparable),
+            r.differences.len(),
+            r.configurations_compared,
+            r.points.iter().filter(|p| p.outcome == Outcome::Reproduced).count(),
+            r.points.len()
+        ));
+    }
+    let texts: Vec<&str> = crate::distinct(all.iter().flat_map(|(_, r)| r.claims.iter().map(|c| c.text.as_str())));
+    if !texts.is_empty() {
+        md.push_str(&format!(
+            "\n| claim | {} |\n|---|{}\n",
+            all.iter().map(|(name, _)| name.as_str()).collect::<Vec<_>>().join(" | "),
+            "---|".repeat(all.len())
+        ));
+        for text in texts {
+            let cells: Vec<String> = all
+                .iter()
+                .map(|(_, r)| {
+                    r.claims.iter().find(|c| c.text == text).map_or("—".into(), |c| {
+                        format!("**{}** ({} then, {} now)", c.outcome.word(), c.recorded, c.reproduced)
+                    })
+                })
+                .collect();
+            md.push_str(&format!("| {} | {} |\n", text.replace('|', "\\|"), cells.join(" | ")));
+        }
+    }
+    Ok(md)
+}
+
+/// Replaces REPORT.md's reproductions section in `dir` (or adds it at the end), leaving the rest of the report as
+/// it is: what `harness reproduce` does to the result set it re-ran, whose rows it only reads.
+pub fn update_report(dir: &Path) -> Result<(), Error> {
+    let path = dir.join("REPORT.md");
+    let text = std::fs::read_to_string(&path).map_err(|e| Error::read(&path, e))?;
+    let section = report_section(dir)?;
+    let (before, after) = match text.find(&format!("\n{SECTION}\n")) {
+        Some(start) => {
+            let rest = &text[start + 1..];
+            let end = rest[SECTION.len()..].find("\n## ").map_or(text.len(), |i| start + 1 + SECTION.len() + i + 1);
+            (&text[..start + 1], &text[end..])
+        }
+        None => (text.as_str(), ""),
+    };
+    let mut out = before.to_string();
+    if !section.is_empty() {
+        if !out.ends_with("\n\n") {
+            out.push('\n');
+        }
+        out.push_str(&section);
+        if !after.is_empty() {
+            out.push('\n');
+        }
+    }
+    out.push_str(after);
+    std::fs::write(&path, out).map_err(|e| Error::write(&path, e))
+}
+
 /// Writes `reproduction.json` and `REPRODUCTION.md` into `dir`.
 pub fn write(dir: &Path, r: &Reproduction, title: &str, how: &[String]) -> Result<(), Error> {
     let json = dir.join(JSON);
@@ -612,5 +711,43 @@ mod tests {
         assert_eq!(c.outcome, Outcome::NotComparable);
         let other = ClaimResult { text: "another claim".into(), ..new.clone() };
         assert_eq!(compare_claims(&[old], &[other])[0].outcome, Outcome::NotComparable);
+    }
+
+    #[test]
+    fn the_report_section_is_replaced_in_place_and_the_rest_of_the_report_kept() {
+        let dir = std::env::temp_dir().join(format!("bvhlab-reproduction-section-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let at = dir.join(FOLDER).join("2026-12-04-abc");
+        std::fs::create_dir_all(&at).unwrap();
+        let old = claim(vec![point("1e3", 1.3, 1.2, 1.4, Verdict::Holds)]);
+        let r = Reproduction {
+            recorded_origin: Origin::default(),
+            reproduced_origin: Origin { commits: vec!["0123456789abcdef".into()], ..Origin::default() },
+            claims: compare_claims(std::slice::from_ref(&old), std::slice::from_ref(&old)),
+            reference: None,
+            points: vec![],
+            deterministic_columns: vec![],
+            configurations_compared: 3,
+            not_comparable: vec![],
+            only_recorded: 0,
+            only_reproduced: 0,
+            differences: vec![],
+        };
+        write(&at, &r, "results/x", &[]).unwrap();
+        let report = dir.join("REPORT.md");
+        std::fs::write(&report, "# x\n\n## Claims\n\nA\n\n## Summary\n\nB\n").unwrap();
+        update_report(&dir).unwrap();
+        let once = std::fs::read_to_string(&report).unwrap();
+        assert!(once.starts_with("# x\n\n## Claims\n\nA\n\n## Summary\n\nB\n\n## Reproductions\n"), "{once}");
+        assert!(once.contains("| [2026-12-04-abc](reproductions/2026-12-04-abc/REPRODUCTION.md) | 0123456789ab |"));
+        assert!(once.contains("| a is faster than b | **reproduced** (holds then, holds now) |"), "{once}");
+        update_report(&dir).unwrap();
+        assert_eq!(std::fs::read_to_string(&report).unwrap(), once, "updating twice changes nothing");
+        // A section in the middle is replaced where it stands.
+        let middle = once.replace("## Summary\n\nB\n\n", "") + "\n## Summary\n\nB\n";
+        std::fs::write(&report, &middle).unwrap();
+        update_report(&dir).unwrap();
+        assert_eq!(std::fs::read_to_string(&report).unwrap(), middle);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

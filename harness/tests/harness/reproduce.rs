@@ -72,6 +72,8 @@ fn a_result_set_reproduces_at_head_and_a_changed_counter_does_not() {
     assert!(made[0].file_name().unwrap().to_string_lossy().ends_with("-head"), "{made:?}");
     let md = std::fs::read_to_string(made[0].join("REPRODUCTION.md")).unwrap();
     assert!(md.contains("every compared column identical") && md.contains("## Claims"), "{md}");
+    let report = std::fs::read_to_string(set.join("REPORT.md")).unwrap();
+    assert!(report.contains("## Reproductions") && report.contains("/REPRODUCTION.md) |"), "{report}");
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(made[0].join("reproduction.json")).unwrap()).unwrap();
     assert_eq!(json["configurations_compared"], 4, "{json}");

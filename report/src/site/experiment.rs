@@ -38,7 +38,7 @@ impl Experiment {
         let summary = summary::summarise(&rows, spec).map_err(|e| Error::read(&runs_csv, e))?;
         let claims = claims::check_all(&rows, spec);
         let name = dir.file_name().map_or_else(|| spec.name.clone(), |n| n.to_string_lossy().into_owned());
-        let reproductions = reproductions_of(dir)?;
+        let reproductions = reproduction::read_all(dir)?;
         Ok(Experiment { dir: dir.into(), name, spec: spec.clone(), rows, claims, summary, reproductions })
     }
 
@@ -56,19 +56,6 @@ impl Experiment {
     pub fn machines(&self) -> Vec<String> {
         crate::distinct(self.rows.runs.iter().map(Run::machine))
     }
-}
-
-/// The reproductions of the result set in `dir`, by folder name (a folder without a verdict is skipped: still
-/// running, or stopped).
-fn reproductions_of(dir: &Path) -> Result<Vec<(String, Reproduction)>, Error> {
-    let Ok(entries) = std::fs::read_dir(dir.join("reproductions")) else { return Ok(Vec::new()) };
-    let mut found: Vec<PathBuf> =
-        entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.join(reproduction::JSON).is_file()).collect();
-    found.sort();
-    found
-        .iter()
-        .map(|p| Ok((p.file_name().unwrap_or_default().to_string_lossy().into_owned(), Reproduction::read(p)?)))
-        .collect()
 }
 
 /// A verdict's word and CSS class.
