@@ -104,14 +104,30 @@ pub struct PointOutcome {
     pub series: String,
     /// The point, as claims name it.
     pub point: String,
-    /// Recorded ratio `metric(reference) / metric(series)` and its 95% interval.
+    /// Recorded ratio `metric(reference) / metric(series)` and its 95% interval (null: none).
+    #[serde(with = "nan_as_null")]
     pub recorded: [f64; 3],
     /// Reproduced ratio and interval.
+    #[serde(with = "nan_as_null")]
     pub reproduced: [f64; 3],
     /// The resolution the point is judged with.
     pub resolution: f64,
     /// The outcome.
     pub outcome: Outcome,
+}
+
+/// JSON has no NaN: a ratio or interval end that is not a number (no interval below six runs) is written as null
+/// and read back as NaN.
+mod nan_as_null {
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(values: &[f64; 3], s: S) -> Result<S::Ok, S::Error> {
+        values.map(|v| v.is_finite().then_some(v)).serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
+        Ok(<[Option<f64>; 3]>::deserialize(d)?.map(|v| v.unwrap_or(f64::NAN)))
+    }
 }
 
 /// Everything a reproduction found.
@@ -733,7 +749,19 @@ mod tests {
             only_reproduced: 0,
             differences: vec![],
         };
+        let nan = f64::NAN;
+        let point = PointOutcome {
+            series: "a".into(),
+            point: "1e3".into(),
+            recorded: [1.0, nan, nan],
+            reproduced: [1.5, 1.4, 1.6],
+            resolution: 0.02,
+            outcome: Outcome::NotComparable,
+        };
+        let r = Reproduction { points: vec![point], ..r };
         write(&at, &r, "results/x", &[]).unwrap();
+        let back = Reproduction::read(&at).unwrap();
+        assert!(back.points[0].recorded[1].is_nan() && back.points[0].reproduced == [1.5, 1.4, 1.6], "{back:?}");
         let report = dir.join("REPORT.md");
         std::fs::write(&report, "# x\n\n## Claims\n\nA\n\n## Summary\n\nB\n").unwrap();
         update_report(&dir).unwrap();
