@@ -107,13 +107,13 @@ impl Drop for Temporary {
 }
 
 /// A git worktree removed when dropped.
-struct Worktree<'a> {
+pub(crate) struct Worktree<'a> {
     root: &'a Path,
-    path: PathBuf,
+    pub path: PathBuf,
 }
 
 impl Worktree<'_> {
-    fn add<'a>(root: &'a Path, path: PathBuf, rev: &str) -> Result<Worktree<'a>, Error> {
+    pub fn add<'a>(root: &'a Path, path: PathBuf, rev: &str) -> Result<Worktree<'a>, Error> {
         let tree = Worktree { root, path };
         tree.remove();
         git(root, &["worktree", "add", "--detach", "--force", tree.path.to_str().expect("utf-8 path"), rev])?;

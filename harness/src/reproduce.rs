@@ -9,7 +9,7 @@ use std::process::{Command, Stdio};
 
 use report::reproduction::{self, Outcome};
 
-use crate::ab::{Build, base_binary, git};
+use crate::ab::{Build, Worktree, base_binary, git};
 use crate::cli::{ReproduceArgs, ReproduceAt};
 use crate::config::Experiment;
 use crate::error::Error;
@@ -117,9 +117,16 @@ pub fn run(args: &ReproduceArgs) -> Result<(), Error> {
     let exp = if args.quick { exp.quick() } else { exp };
 
     let here = provenance::Provenance::collect();
+    // The recorded commit's harness runs in a checkout of that commit: its rows record the commit (the harness reads
+    // it from the folder it runs in), and the config's relative paths mean what they meant then.
+    let mut checkout: Option<Worktree<'_>> = None;
     let (binary, at) = match args.at {
         ReproduceAt::Recorded => {
-            (base_binary(&root, &Build::running()?, &commit)?, format!("recorded commit {}", short(&commit)))
+            let build = Build::running()?;
+            let binary = base_binary(&root, &build, &commit)?;
+            let path = build.target.join("ab").join(format!("reproduce-{}-{}", short(&commit), std::process::id()));
+            checkout = Some(Worktree::add(&root, path, &commit)?);
+            (binary, format!("recorded commit {}", short(&commit)))
         }
         ReproduceAt::Head => (
             std::env::current_exe().map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?,
@@ -154,7 +161,12 @@ pub fn run(args: &ReproduceArgs) -> Result<(), Error> {
         out.display()
     );
     let mut cmd = Command::new(&binary);
-    cmd.current_dir(&root).arg("run").arg(&config).arg("--out").arg(&out).stdin(Stdio::null());
+    cmd.current_dir(checkout.as_ref().map_or(root.as_path(), |c| c.path.as_path()))
+        .arg("run")
+        .arg(&config)
+        .arg("--out")
+        .arg(&out)
+        .stdin(Stdio::null());
     if args.quick {
         cmd.arg("--quick");
     }
@@ -166,6 +178,7 @@ pub fn run(args: &ReproduceArgs) -> Result<(), Error> {
         )));
     }
 
+    drop(checkout);
     let spec = exp.report_spec(vec![]);
     let result = reproduction::compare(&dir, &out, &spec).map_err(|e| Error::Run(e.to_string()))?;
     let how = vec![
