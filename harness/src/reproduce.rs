@@ -69,6 +69,27 @@ fn short(commit: &str) -> &str {
     &commit[..commit.len().min(12)]
 }
 
+/// The result set's config as committed with its rows: `experiment.toml` as of the commit that last changed
+/// `runs.csv` (a later commit may have added figures to it, which the recorded commit's harness would refuse to
+/// read), or the file as it is where the rows are not committed as they are. Returns the text and where it is from.
+fn config_as_recorded(root: &Path, dir: &Path) -> Result<(String, String), Error> {
+    let working = || {
+        std::fs::read_to_string(dir.join(CONFIG_COPY))
+            .map(|text| (text, "it is in the result set (its rows are not committed as they are)".to_string()))
+            .map_err(|e| Error::Input(format!("{}: cannot read: {e}", dir.join(CONFIG_COPY).display())))
+    };
+    let Ok(rel) = dir.strip_prefix(root) else { return working() };
+    let (runs, config) = (rel.join(RUNS_CSV), rel.join(CONFIG_COPY));
+    let (runs, config) = (runs.to_string_lossy(), config.to_string_lossy());
+    let changed = git(root, &["status", "--porcelain", "--", &runs, &config]).unwrap_or_else(|_| "?".into());
+    let commit = git(root, &["log", "-1", "--format=%H", "--", &runs]).unwrap_or_default();
+    if !changed.is_empty() || commit.is_empty() {
+        return working();
+    }
+    let text = git(root, &["show", &format!("{commit}:{config}")])?;
+    Ok((text + "\n", format!("committed with the rows ({config} at {})", short(&commit))))
+}
+
 /// A folder name not yet taken under `parent`: `name`, else `name-2`, `name-3`, …
 fn fresh(parent: &Path, name: &str) -> PathBuf {
     (1..)
@@ -160,10 +181,24 @@ pub fn run(args: &ReproduceArgs) -> Result<(), Error> {
         short(&commit),
         out.display()
     );
+    // The recorded commit's harness runs the config as committed with the rows, in its checkout.
+    let run_config = match &checkout {
+        Some(checkout) => {
+            let (text, from) = config_as_recorded(&root, &dir)?;
+            let rel = dir.strip_prefix(&root).unwrap_or(Path::new("results/reproduced"));
+            let path = checkout.path.join(rel).join(CONFIG_COPY);
+            std::fs::create_dir_all(path.parent().expect("a folder"))
+                .and_then(|()| std::fs::write(&path, text))
+                .map_err(|e| Error::Run(format!("{}: {e}", path.display())))?;
+            say!("reproduce: the config as {from}");
+            path
+        }
+        None => config.clone(),
+    };
     let mut cmd = Command::new(&binary);
     cmd.current_dir(checkout.as_ref().map_or(root.as_path(), |c| c.path.as_path()))
         .arg("run")
-        .arg(&config)
+        .arg(&run_config)
         .arg("--out")
         .arg(&out)
         .stdin(Stdio::null());
