@@ -7,7 +7,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use report::reproduction::{self, Outcome};
+use report::distinct;
+use report::reproduction::{self, Outcome, short_commit as short};
 
 use crate::ab::{Build, Worktree, base_binary, git};
 use crate::cli::{ReproduceArgs, ReproduceAt};
@@ -51,22 +52,6 @@ fn recorded_origin(dir: &Path) -> Result<Origin, Error> {
         )));
     }
     Ok(Origin { commit: commits[0].clone(), machine: machines[0].clone(), dirty: rows.iter().any(|r| r.git_dirty) })
-}
-
-/// The distinct values, in order of appearance.
-fn distinct(values: impl Iterator<Item = String>) -> Vec<String> {
-    let mut out: Vec<String> = Vec::new();
-    for v in values {
-        if !out.contains(&v) {
-            out.push(v);
-        }
-    }
-    out
-}
-
-/// A commit's first 12 digits (all of a shorter text, e.g. `unknown`).
-fn short(commit: &str) -> &str {
-    &commit[..commit.len().min(12)]
 }
 
 /// The result set's config as committed with its rows: `experiment.toml` as of the commit that last changed

@@ -33,7 +33,7 @@ pub use error::Error;
 use spec::ReportSpec;
 
 /// The distinct values of `values`, in order of appearance.
-pub(crate) fn distinct<T: PartialEq>(values: impl IntoIterator<Item = T>) -> Vec<T> {
+pub fn distinct<T: PartialEq>(values: impl IntoIterator<Item = T>) -> Vec<T> {
     let mut out = Vec::new();
     for value in values {
         if !out.contains(&value) {

@@ -29,6 +29,11 @@ pub const JSON: &str = "reproduction.json";
 /// The same verdict for readers.
 pub const MARKDOWN: &str = "REPRODUCTION.md";
 
+/// A commit's first 12 digits (all of a shorter text, e.g. `unknown`).
+pub fn short_commit(commit: &str) -> &str {
+    &commit[..commit.len().min(12)]
+}
+
 /// The resolution at a point where at most `threads` worker threads ran.
 pub fn resolution(threads: f64) -> f64 {
     if threads <= 1.0 { RESOLUTION_ONE_THREAD } else { RESOLUTION_ALL_CORES }
@@ -460,7 +465,7 @@ pub fn markdown(r: &Reproduction, title: &str, how: &[String]) -> String {
     let origin = |o: &Origin| {
         format!(
             "commit {}, machine {}, {} rows{}",
-            o.commits.iter().map(|c| format!("`{}`", &c[..c.len().min(12)])).collect::<Vec<_>>().join(", "),
+            o.commits.iter().map(|c| format!("`{}`", short_commit(c))).collect::<Vec<_>>().join(", "),
             o.machines.join(", "),
             o.rows,
             if o.failed > 0 { format!(" ({} failed validation)", o.failed) } else { String::new() }
@@ -591,7 +596,7 @@ pub fn report_section(dir: &Path) -> Result<String, Error> {
     );
     for (name, r) in &all {
         let claims = |o: Outcome| r.claims.iter().filter(|c| c.outcome == o).count();
-        let commits: Vec<&str> = r.reproduced_origin.commits.iter().map(|c| &c[..c.len().min(12)]).collect();
+        let commits: Vec<&str> = r.reproduced_origin.commits.iter().map(|c| short_commit(c)).collect();
         md.push_str(&format!(
             "| [{name}]({FOLDER}/{name}/{MARKDOWN}) | {} | {} | **{}** | {} / {} / {} | {} of {} configurations | {} of {} |\n",
             commits.join(", "),

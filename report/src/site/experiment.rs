@@ -202,7 +202,14 @@ fn reproductions_section(reproductions: &[(String, Reproduction)]) -> String {
             badge(r.outcome()),
             escape(&r.recorded_origin.machines.join(", ")),
             escape(&r.reproduced_origin.machines.join(", ")),
-            escape(&r.reproduced_origin.commits.iter().map(|c| &c[..c.len().min(12)]).collect::<Vec<_>>().join(", ")),
+            escape(
+                &r.reproduced_origin
+                    .commits
+                    .iter()
+                    .map(|c| reproduction::short_commit(c))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
             r.configurations_compared,
             r.differences.len(),
             r.points.len() - moved,
