@@ -494,7 +494,11 @@ fn failure(results: &[(String, Speed, Answers)], allow_different_answers: bool) 
 /// A configuration as the table and the messages name it.
 fn describe(c: &Configuration) -> String {
     let s = &c.settings;
-    format!("{} | {} objects {} {}", c.series, schema::Named::name(s.scene), s.objects, s.strategy())
+    let scene = match (&s.mesh, s.view) {
+        (Some(mesh), Some(view)) => format!("mesh {mesh} {}", schema::Named::name(view)),
+        _ => format!("{} objects {}", schema::Named::name(s.scene), s.objects),
+    };
+    format!("{} | {scene} {} {}", c.series, schema::Named::name(s.workload), s.strategy())
 }
 
 /// A configuration's samples and answers from both builds.

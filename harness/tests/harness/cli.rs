@@ -738,7 +738,7 @@ fn ab_against_head_reports_ratios_near_one() {
         assert!(!stderr(&o).contains("ab: building"), "{}", stderr(&o));
     }
     assert_eq!(ab_digest(binary), before, "the base build's binary does not stay in place of this one");
-    assert!(out.contains("| default | random-spheres objects 3000 serial |"), "{out}");
+    assert!(out.contains("| default | random-spheres objects 3000 primary serial |"), "{out}");
     assert!(out.contains("| same |"), "both builds answer alike: {out}");
     // The ratio and its interval are well formed (how near 1 they come is a measurement, not a test: on a loaded
     // 2-core machine the interval reached [0.31, 2.11] around a same-build ratio of 0.59).
