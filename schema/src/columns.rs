@@ -2,7 +2,7 @@
 //! the measures. Adding a setting is one entry here (plus the tracer code that uses it).
 
 use tracer::accel::bvh::{SahCosts, SpatialAlpha};
-use tracer::accel::wide::{ChildOrdering, Kernel};
+use tracer::accel::wide::{AnyHitOrdering, ChildOrdering, Kernel};
 use tracer::accel::{AccelKind, AccelParams, BvhParams, Split, Traversal, WideParams};
 use tracer::executor::{Strategy, StrategyKind};
 use tracer::geometry::TriangleTest;
@@ -81,6 +81,10 @@ declare_columns! {
         simd_kernel: Option<Kernel> = Some(WideParams::default().kernel), applies wide else None, added 2;
         /// Order in which the wide BVH visits a node's children: stored, nearest entry first, or by ray octant.
         child_order: Option<ChildOrdering> = Some(WideParams::default().order), applies wide else None, added 2;
+        /// Order in which the wide BVH's any-hit (occlusion) rays visit a node's children: `child-order` (as
+        /// `child_order`) or `none` (stored order: no entry distances sorted for a ray that stops at its first hit).
+        any_hit_order: Option<AnyHitOrdering> = Some(WideParams::default().any_hit_order), applies wide else None,
+            added 10;
         /// How the wide BVH traces a ray set's rays (renders trace one at a time): `single` (one at a time),
         /// `masked-8` or `masked-16` (packets of 8 or 16 rays with an active mask), or `tile-8x8` (frustum-culled
         /// packets of an 8×8 tile of camera rays). Rows before this column had it in `packet_size` (1, 8, 16, 64).
@@ -420,6 +424,7 @@ impl Settings {
             leaf_block: self.leaf_block.map_or(wide_default.leaf_block, |b| b.0),
             kernel: self.simd_kernel.unwrap_or(wide_default.kernel),
             order: self.child_order.unwrap_or(wide_default.order),
+            any_hit_order: self.any_hit_order.unwrap_or(wide_default.any_hit_order),
             packet: self.packet.map_or(wide_default.packet, Packet::rays),
         };
         AccelParams { kind, bvh, wide }

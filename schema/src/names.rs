@@ -4,7 +4,7 @@
 use std::fmt;
 
 use serde::{Deserialize, Serialize};
-use tracer::accel::wide::{ChildOrdering, Kernel, WideParams};
+use tracer::accel::wide::{AnyHitOrdering, ChildOrdering, Kernel, WideParams};
 use tracer::accel::{AccelKind, Split, Traversal};
 use tracer::executor::StrategyKind;
 use tracer::geometry::TriangleTest;
@@ -48,6 +48,7 @@ named_by_inherent!(
     RayKind,
     Kernel,
     ChildOrdering,
+    AnyHitOrdering,
     TriangleTest,
     View
 );
@@ -504,6 +505,7 @@ mod tests {
         round_trip::<EmbreeIsa>();
         round_trip::<Kernel>();
         round_trip::<ChildOrdering>();
+        round_trip::<AnyHitOrdering>();
         round_trip::<Packet>();
         round_trip::<TriangleTest>();
         round_trip::<View>();

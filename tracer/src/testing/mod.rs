@@ -21,7 +21,7 @@ pub use agree::{Comparison, Reference, Tally, assert_every_tree_agrees, assert_e
 pub use meshes::{TestMesh, mesh_ray_mix, test_meshes};
 pub use rays::{scene_ray_mix, secondary_rays, sphere_ray_mix};
 
-use crate::accel::wide::{ChildOrdering, Kernel};
+use crate::accel::wide::{AnyHitOrdering, ChildOrdering, Kernel};
 use crate::accel::{AccelKind, AccelParams, BvhParams, Split, Traversal, WideParams};
 use crate::geometry::{Ray, Sphere};
 use crate::scene::SceneKind;
@@ -47,13 +47,15 @@ pub fn every_tree() -> Vec<AccelParams> {
 
 /// Every wide BVH configuration this CPU can run: every kernel it has ([`Kernel::available`]: scalar, AVX2,
 /// AVX-512) × width × leaf block × child order. The binary tree each is collapsed from cycles through every split ×
-/// leaf sizes 1, 16, 4 and 8 (so leaves of one block, of several blocks and merged subtrees all occur), and the
-/// batch packet size through 1, 8, 16 and 64 (so every kernel, width and block runs in packets of every size).
+/// leaf sizes 1, 16, 4 and 8 (so leaves of one block, of several blocks and merged subtrees all occur), the
+/// batch packet size through 1, 8, 16 and 64 (so every kernel, width and block runs in packets of every size), and
+/// the any-hit order through both (so with 3 child orders each child order meets each).
 #[inline]
 pub fn every_wide() -> Vec<AccelParams> {
     let mut all = Vec::new();
     let mut binary = Split::ALL.into_iter().flat_map(|split| [1, 16, 4, 8].map(|leaf_size| (split, leaf_size))).cycle();
     let mut packets = WideParams::PACKETS.into_iter().cycle();
+    let mut any_hit_orders = AnyHitOrdering::ALL.into_iter().cycle();
     for kernel in Kernel::available() {
         for width in WideParams::WIDTHS {
             for leaf_block in WideParams::LEAF_BLOCKS {
@@ -61,7 +63,8 @@ pub fn every_wide() -> Vec<AccelParams> {
                     let (split, leaf_size) = binary.next().expect("cycle");
                     let bvh = BvhParams { split, leaf_size, traversal: Traversal::FrontToBack, ..BvhParams::default() };
                     let packet = packets.next().expect("cycle");
-                    let wide = WideParams { width, leaf_block, kernel, order, packet };
+                    let any_hit_order = any_hit_orders.next().expect("cycle");
+                    let wide = WideParams { width, leaf_block, kernel, order, any_hit_order, packet };
                     all.push(AccelParams { kind: AccelKind::WideBvh, bvh, wide });
                 }
             }

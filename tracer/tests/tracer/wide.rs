@@ -146,7 +146,14 @@ fn same_seed_same_tree_and_counts_in_any_thread_count() {
     let pool = |t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
     for wide in [
         WideParams::default(),
-        WideParams { width: 4, leaf_block: 16, kernel: Kernel::Scalar, order: ChildOrdering::Octant, packet: 8 },
+        WideParams {
+            width: 4,
+            leaf_block: 16,
+            kernel: Kernel::Scalar,
+            order: ChildOrdering::Octant,
+            packet: 8,
+            ..WideParams::default()
+        },
     ] {
         let trees: Vec<WideBvh> = [1, 2, 1].map(|t| pool(t).install(|| WideBvh::build(&spheres, &bvh, &wide))).into();
         let counts = |t: &WideBvh| {
@@ -358,7 +365,14 @@ fn serialized_params_of_other_kinds_are_unchanged_and_wide_params_round_trip() {
     assert_eq!(serde_json::from_str::<AccelParams>(&text).unwrap(), flat);
     let wide = AccelParams {
         kind: AccelKind::WideBvh,
-        wide: WideParams { width: 4, leaf_block: 16, kernel: Kernel::Scalar, order: ChildOrdering::Octant, packet: 1 },
+        wide: WideParams {
+            width: 4,
+            leaf_block: 16,
+            kernel: Kernel::Scalar,
+            order: ChildOrdering::Octant,
+            packet: 1,
+            ..WideParams::default()
+        },
         ..AccelParams::default()
     };
     let text = serde_json::to_string(&wide).unwrap();

@@ -1,7 +1,7 @@
 //! A wide BVH with SIMD leaves (issue #11): the binary tree collapsed into 4- or 8-wide nodes whose child boxes are
 //! tested at once, and leaves whose primitives (spheres or triangles) are tested a block at a time.
 //!
-//! - [`params`]: width, leaf block, kernel and child order ([`WideParams`]);
+//! - [`params`]: width, leaf block, kernel, child order and any-hit order ([`WideParams`]);
 //! - [`node`]: the wide node (child boxes per axis, 64-byte aligned); [`leaf`]: the primitive blocks;
 //! - [`collapse`]: from the shared binary builder's tree (built with the SAH counting leaf blocks) to wide nodes;
 //! - [`ray`], [`order`], [`traverse`]: the traversal, generic over [`kernel`] (scalar, AVX2, AVX-512), child
@@ -32,7 +32,7 @@ use tile::Tiles;
 use traverse::{Any, AnyBatch, Closest, ClosestBatch};
 
 pub use leaf::{LeafBlock, WidePrimitive};
-pub use params::{ChildOrdering, Kernel, WideParams};
+pub use params::{AnyHitOrdering, ChildOrdering, Kernel, WideParams};
 
 use super::bvh::{BvhParams, ParamError, TreeStats, builder, sah};
 use super::{Accelerator, Hit};
@@ -147,16 +147,24 @@ impl<P: WidePrimitive> WideBvh<P> {
         }
     }
 
-    /// Runs `query` with this tree's layout, child order and kernel: the one dispatch per query.
+    /// The child order of any-hit queries.
+    fn any_hit_order(&self) -> ChildOrdering {
+        match self.params.any_hit_order {
+            AnyHitOrdering::ChildOrder => self.params.order,
+            AnyHitOrdering::None => ChildOrdering::None,
+        }
+    }
+
+    /// Runs `query` with this tree's layout, child order `order` and kernel: the one dispatch per query.
     #[inline(always)]
-    fn dispatch<Q: Query>(&self, query: Q) -> Q::Out {
+    fn dispatch<Q: Query>(&self, order: ChildOrdering, query: Q) -> Q::Out {
         match &self.layout {
-            Layout::W4B4(t) => self.ordered(t, query),
-            Layout::W4B8(t) => self.ordered(t, query),
-            Layout::W4B16(t) => self.ordered(t, query),
-            Layout::W8B4(t) => self.ordered(t, query),
-            Layout::W8B8(t) => self.ordered(t, query),
-            Layout::W8B16(t) => self.ordered(t, query),
+            Layout::W4B4(t) => self.ordered(t, order, query),
+            Layout::W4B8(t) => self.ordered(t, order, query),
+            Layout::W4B16(t) => self.ordered(t, order, query),
+            Layout::W8B4(t) => self.ordered(t, order, query),
+            Layout::W8B8(t) => self.ordered(t, order, query),
+            Layout::W8B16(t) => self.ordered(t, order, query),
         }
     }
 
@@ -175,8 +183,13 @@ impl<P: WidePrimitive> WideBvh<P> {
     }
 
     #[inline(always)]
-    fn ordered<Q: Query, const W: usize, const B: usize>(&self, tree: &Tree<W, B, P>, query: Q) -> Q::Out {
-        match self.params.order {
+    fn ordered<Q: Query, const W: usize, const B: usize>(
+        &self,
+        tree: &Tree<W, B, P>,
+        order: ChildOrdering,
+        query: Q,
+    ) -> Q::Out {
+        match order {
             ChildOrdering::None => self.run::<Q, Stored, W, B>(tree, query),
             ChildOrdering::Distance => self.run::<Q, Nearest, W, B>(tree, query),
             ChildOrdering::Octant => self.run::<Q, ByOctant, W, B>(tree, query),
@@ -235,11 +248,11 @@ fn stats<P: WidePrimitive, const W: usize, const B: usize>(tree: &Tree<W, B, P>)
 
 impl<P: WidePrimitive> Accelerator for WideBvh<P> {
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
-        self.dispatch(Closest { ray, counters })
+        self.dispatch(self.params.order, Closest { ray, counters })
     }
 
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
-        self.dispatch(Any { ray, counters })
+        self.dispatch(self.any_hit_order(), Any { ray, counters })
     }
 
     fn stats(&self) -> TreeStats {
@@ -251,7 +264,7 @@ impl<P: WidePrimitive> Accelerator for WideBvh<P> {
             8 => self.dispatch_packets(Packets::<C, _, 8> { rays, out, counters }),
             16 => self.dispatch_packets(Packets::<C, _, 16> { rays, out, counters }),
             64 => self.dispatch_packets(Tiles { rays, out, counters }),
-            _ => self.dispatch(ClosestBatch { rays, out, counters }),
+            _ => self.dispatch(self.params.order, ClosestBatch { rays, out, counters }),
         }
     }
 
@@ -260,7 +273,7 @@ impl<P: WidePrimitive> Accelerator for WideBvh<P> {
             8 => self.dispatch_packets(Packets::<C, _, 8> { rays, out, counters }),
             16 => self.dispatch_packets(Packets::<C, _, 16> { rays, out, counters }),
             64 => self.dispatch_packets(Tiles { rays, out, counters }),
-            _ => self.dispatch(AnyBatch { rays, out, counters }),
+            _ => self.dispatch(self.any_hit_order(), AnyBatch { rays, out, counters }),
         }
     }
 }

@@ -101,6 +101,34 @@ impl ChildOrdering {
     }
 }
 
+/// The order in which any-hit (occlusion) traversal visits a node's children.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum AnyHitOrdering {
+    /// The [`ChildOrdering`] of nearest hits.
+    #[default]
+    ChildOrder,
+    /// Stored order, whatever the child order: no distances sorted for a ray that stops at its first hit.
+    None,
+}
+
+impl AnyHitOrdering {
+    /// Every ordering, in the order tools list them.
+    pub const ALL: [AnyHitOrdering; 2] = [AnyHitOrdering::ChildOrder, AnyHitOrdering::None];
+
+    /// The kebab-case name used in configs and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            AnyHitOrdering::ChildOrder => "child-order",
+            AnyHitOrdering::None => "none",
+        }
+    }
+
+    fn is_child_order(&self) -> bool {
+        *self == AnyHitOrdering::ChildOrder
+    }
+}
+
 /// Parameters of a wide BVH (the binary tree it is collapsed from has its own [`crate::accel::BvhParams`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -113,6 +141,9 @@ pub struct WideParams {
     pub kernel: Kernel,
     /// The child visiting order; see [`ChildOrdering`].
     pub order: ChildOrdering,
+    /// The child visiting order of any-hit rays; see [`AnyHitOrdering`]. Left out when serialized at its default.
+    #[serde(skip_serializing_if = "AnyHitOrdering::is_child_order")]
+    pub any_hit_order: AnyHitOrdering,
     /// Rays a batch traces together, in [`WideParams::PACKETS`]: 1 traces them one by one, 8 or 16 in packets
     /// with an active mask (see [`super::packet`]), 64 in frustum-culled packets of an 8×8 tile of camera rays
     /// (see [`super::tile`]). Left out when serialized at 1.
@@ -122,7 +153,14 @@ pub struct WideParams {
 
 impl Default for WideParams {
     fn default() -> Self {
-        Self { width: 8, leaf_block: 8, kernel: Kernel::Auto, order: ChildOrdering::Distance, packet: 1 }
+        Self {
+            width: 8,
+            leaf_block: 8,
+            kernel: Kernel::Auto,
+            order: ChildOrdering::Distance,
+            any_hit_order: AnyHitOrdering::ChildOrder,
+            packet: 1,
+        }
     }
 }
 
@@ -222,5 +260,9 @@ mod tests {
         let text = serde_json::to_string(&packets).unwrap();
         assert_eq!(text, r#"{"width":8,"leaf_block":8,"kernel":"auto","order":"distance","packet":16}"#);
         assert_eq!(serde_json::from_str::<WideParams>(&text).unwrap(), packets);
+        let unsorted = WideParams { any_hit_order: AnyHitOrdering::None, ..WideParams::default() };
+        let text = serde_json::to_string(&unsorted).unwrap();
+        assert_eq!(text, r#"{"width":8,"leaf_block":8,"kernel":"auto","order":"distance","any_hit_order":"none"}"#);
+        assert_eq!(serde_json::from_str::<WideParams>(&text).unwrap(), unsorted);
     }
 }
