@@ -1,8 +1,9 @@
 //! `harness site` in a real headless browser (Debian's `chromium`, driven over the DevTools protocol on its debugging
 //! pipe): the site built from the committed results/ loads every page without console errors (each page's load
 //! time is printed, not asserted: speed is measured, never gated by a test), the index links every experiment,
-//! hovering a known point shows its median from summary.csv, chart titles and legends stay clear of the plot (and
-//! axis titles of tick labels), and no page's screenshot is blank. Skipped without chromium, unless
+//! hovering a known point shows its median from summary.csv, the meshes and peers pages lead with a ratio matrix
+//! whose every filled cell is coloured by its verdict (above their figures), chart titles and legends stay clear of
+//! the plot (and axis titles of tick labels), and no page's screenshot is blank. Skipped without chromium, unless
 //! `BVHLAB_REQUIRE_BROWSER=1` (CI).
 
 use std::fs::File;
@@ -324,6 +325,26 @@ fn the_site_of_the_committed_results_works_in_a_browser() {
     assert!(tip.starts_with(&series), "{tip}");
     assert!((shown - median).abs() <= 5e-4 * median.abs(), "tooltip median {shown}, summary.csv {median}");
     eprintln!("hover over {series} at {objects} objects: median {shown} (summary.csv {median})");
+
+    // The head-to-head pages lead with the answer: a ratio matrix coloured by verdict, above their figures.
+    for page in ["meshes", "peers"] {
+        browser.open(&url(&format!("{page}.html")));
+        let seen = browser.eval(
+            "(() => { const m = document.querySelector('table.matrix'), f = document.querySelectorAll('figure img, figure.chart');
+                if (!m) return null;
+                const cells = Array.from(m.querySelectorAll('tbody td')).filter(c => c.textContent.trim() !== '');
+                const coloured = cells.filter(c => ['faster', 'slower', 'same'].some(k => c.classList.contains(k))).length;
+                const firstFigure = f.length ? f[0].getBoundingClientRect().top : -1;
+                return [m.querySelectorAll('tbody tr').length, cells.length, coloured, f.length,
+                        m.getBoundingClientRect().top < firstFigure]; })()",
+        );
+        let [rows, cells, coloured, figures, above] = seen.as_array().map(Vec::as_slice).unwrap_or_default() else {
+            panic!("{page}.html: no ratio matrix ({seen})");
+        };
+        assert!(rows.as_u64() > Some(0) && cells.as_u64() > Some(0) && cells == coloured, "{page}.html: matrix {seen}");
+        assert!(figures.as_u64() > Some(0) && *above == json!(true), "{page}.html: figures below the matrix {seen}");
+        eprintln!("{page}.html: ratio matrix of {rows} points, {coloured} coloured cells, {figures} figures below it");
+    }
 }
 
 /// Opens each of `pages` (in `out`) in a browser of its own and checks it: no console errors, no chart title or
