@@ -6,8 +6,8 @@ use schema::Settings;
 
 use crate::error::Error;
 
-/// The rayon pool of the configured threads (with two or more, each pinned to a CPU of its own: see [`pinning`]) that builds and traces run in, and what the backend started
-/// ([`super::Backend::start`]: Embree's library and device).
+/// The rayon pool of the configured threads that builds and traces run in (two or more each pinned to a CPU of its
+/// own: [`pinning`]), and what the backend started ([`super::Backend::start`]: Embree's library and device).
 pub struct Setup {
     pool: rayon::ThreadPool,
     started: Option<Box<dyn Any + Send + Sync>>,
@@ -51,8 +51,8 @@ impl Setup {
 ///
 /// Why: a pool's threads sleep between passes, and a pass (1–3 ms on a small mesh) is shorter than the
 /// scheduler's load balancing; woken each time, both threads of a two-thread pool can land on one vCPU and stay
-/// there for a whole sample, which then takes 2.0× as long. In `results/meshes` at 379dacc (2-vCPU VM) 8% of the
-/// two-thread samples of in-process backends did (docs/statistics.md). Pinned, the pool's threads run on
+/// there for a whole sample, which then takes 2.0× as long. In a recording of `meshes.toml` at 379dacc (2-vCPU VM) 6% of
+/// the two-thread samples of in-process backends did (docs/statistics.md). Pinned, the pool's threads run on
 /// different CPUs, in this process and in Embree's worker alike; one-thread pools stay unpinned.
 pub mod pinning {
     /// The CPUs a pool of `threads` threads pins its threads to: the first `threads` CPUs this process may run on;
