@@ -51,8 +51,8 @@ impl Setup {
 ///
 /// Why: a pool's threads sleep between passes, and a pass (1–3 ms on a small mesh) is shorter than the
 /// scheduler's load balancing; woken each time, both threads of a two-thread pool can land on one vCPU and stay
-/// there for a whole sample, which then takes 2.0× as long. In a recording of `meshes.toml` at 379dacc (2-vCPU VM) 6% of
-/// the two-thread samples of in-process backends did (docs/statistics.md). Pinned, the pool's threads run on
+/// there for a whole sample, which then takes 2.0× as long. In a recording of `meshes.toml` at 379dacc (2-vCPU VM)
+/// 6% of the two-thread samples of in-process backends did (docs/statistics.md). Pinned, the pool's threads run on
 /// different CPUs, in this process and in Embree's worker alike; one-thread pools stay unpinned.
 pub mod pinning {
     /// The CPUs a pool of `threads` threads pins its threads to: the first `threads` CPUs this process may run on;
