@@ -10,6 +10,10 @@ use clap::{Args, Parser, Subcommand};
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
+    /// Run on 4-KiB pages: by default glibc's malloc puts every backend's large blocks on transparent huge pages,
+    /// as Embree's allocator does its own (the `huge_pages` column; docs/statistics.md).
+    #[arg(long, global = true)]
+    pub small_pages: bool,
 }
 
 #[derive(Subcommand, Debug)]

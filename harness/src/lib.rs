@@ -16,6 +16,8 @@ mod error;
 mod list;
 mod merge;
 pub mod meshes;
+/// Transparent huge pages for every backend's allocations (the harness starts itself again with them).
+mod pages;
 pub mod peers;
 mod plan;
 mod render;
@@ -43,6 +45,10 @@ use plan::Plan;
 /// The command line: parses the arguments, runs the command, and returns its exit code.
 pub fn main() -> ExitCode {
     let cli = cli::Cli::parse();
+    // A worker runs on the pages its parent chose (it inherits the environment; its arguments do not say).
+    if !matches!(cli.command, Command::Worker) {
+        pages::ensure(!cli.small_pages);
+    }
     let result = match cli.command {
         Command::Run(args) => run_command(&args),
         Command::Report(args) => report_command(&args),

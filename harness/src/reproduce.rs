@@ -23,6 +23,8 @@ struct Origin {
     machine: String,
     /// Whether the tree had uncommitted changes (then no commit holds the code that recorded the rows).
     dirty: bool,
+    /// Whether the rows were timed on transparent huge pages (`huge_pages` `malloc` or `always`).
+    huge_pages: bool,
 }
 
 /// Where a result set was recorded, or why it cannot be reproduced.
@@ -51,7 +53,26 @@ fn recorded_origin(dir: &Path) -> Result<Origin, Error> {
             machines.join(", ")
         )));
     }
-    Ok(Origin { commit: commits[0].clone(), machine: machines[0].clone(), dirty: rows.iter().any(|r| r.git_dirty) })
+    Ok(Origin {
+        commit: commits[0].clone(),
+        machine: machines[0].clone(),
+        dirty: rows.iter().any(|r| r.git_dirty),
+        huge_pages: rows.iter().any(|r| matches!(r.huge_pages.as_str(), "malloc" | "always")),
+    })
+}
+
+/// Runs `cmd` (a `harness run` of `binary`) on the pages the rows were recorded on: glibc's huge-page tunable set
+/// or removed (a harness older than the `huge_pages` column keeps what it is given), and `--small-pages` for a
+/// harness that would otherwise set it itself.
+fn on_recorded_pages(cmd: &mut Command, binary: &Path, huge: bool) {
+    crate::pages::set_tunable(cmd, huge);
+    let knows_small_pages = Command::new(binary)
+        .args(["run", "--help"])
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).contains("--small-pages"));
+    if !huge && knows_small_pages {
+        cmd.arg("--small-pages");
+    }
 }
 
 /// The result set's config as committed with its rows: `experiment.toml` as of the commit that last changed
@@ -94,7 +115,7 @@ pub fn run(args: &ReproduceArgs) -> Result<(), Error> {
             args.dir.display()
         )));
     }
-    let Origin { commit, machine, dirty } = recorded_origin(&dir)?;
+    let Origin { commit, machine, dirty, huge_pages } = recorded_origin(&dir)?;
     let root = PathBuf::from(git(Path::new("."), &["rev-parse", "--show-toplevel"])?);
     if args.at == ReproduceAt::Recorded {
         let exists = Command::new("git")
@@ -190,6 +211,7 @@ pub fn run(args: &ReproduceArgs) -> Result<(), Error> {
     if args.quick {
         cmd.arg("--quick");
     }
+    on_recorded_pages(&mut cmd, &binary, huge_pages);
     let status = cmd.status().map_err(|e| Error::Run(format!("{}: {e}", binary.display())))?;
     if !status.success() {
         return Err(Error::Run(format!(

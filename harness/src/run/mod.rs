@@ -295,6 +295,7 @@ fn row(r: &Recording, c: &Configuration, rep: u32, t: &Timing, v: &Checked, star
     row.boot_id = m.boot_id.clone();
     row.cargo_lock = p.cargo_lock.clone();
     row.slurm_job_id = p.slurm_job_id.clone();
+    row.huge_pages = p.huge_pages.clone();
     if let Some((i, n)) = shard {
         row.shard = format!("{i}/{n}");
         row.node = if p.node.is_empty() { provenance::hostname() } else { p.node.clone() };

@@ -19,6 +19,8 @@ pub struct Provenance {
     pub slurm_job_id: String,
     /// `SLURMD_NODENAME` (empty outside Slurm; a sharded run fills in the host name).
     pub node: String,
+    /// Where this process's large blocks lie (`huge_pages`).
+    pub huge_pages: String,
 }
 
 /// The instruction-set extensions rows report, as `/proc/cpuinfo` flags and as Rust target features.
@@ -180,6 +182,7 @@ impl Provenance {
             cargo_lock: env!("BVHLAB_CARGO_LOCK_HASH").to_string(),
             slurm_job_id: ["SLURM_ARRAY_JOB_ID", "SLURM_JOB_ID"].iter().find_map(|v| env_var(v)).unwrap_or_default(),
             node: env_var("SLURMD_NODENAME").unwrap_or_default(),
+            huge_pages: crate::pages::current().name().to_string(),
         }
     }
 }
