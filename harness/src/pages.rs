@@ -1,17 +1,20 @@
 //! Transparent huge pages for every backend's memory, not only Embree's.
 //!
 //! Embree's allocator asks the kernel for transparent huge pages on its large blocks; our structures, obvhs's and
-//! tinybvh's allocate through glibc's malloc, which asks only when told to by the tunable
-//! `glibc.malloc.hugetlb=1` (glibc 2.35 and later). Under the kernel's usual `madvise` mode that left Embree alone
-//! on 2-MiB pages, and left our series' timings with an offset fixed by where a process's pages happened to lie
-//! (docs/statistics.md). glibc reads its tunables once, when a process starts, so [`ensure`] starts the harness
-//! again with the tunable set before it does anything else; the workers it starts inherit it. `--small-pages`
-//! runs without it, and every row says which it got (`huge_pages`).
+//! tinybvh's allocate through glibc's malloc, which asks only when its tunables say so (glibc 2.35 and later).
+//! Under the kernel's usual `madvise` mode that left Embree alone on 2-MiB pages, and left two series of one
+//! process with a speed offset fixed by where their 4-KiB pages happened to lie (docs/statistics.md). glibc reads
+//! its tunables once, when a process starts, so [`ensure`] starts the harness again with them set before it does
+//! anything else; the workers it starts inherit them. `--small-pages` runs without, and every row says which it
+//! got (`huge_pages`).
 
 use std::ffi::OsString;
 
-/// The glibc tunable that makes malloc ask for transparent huge pages on the blocks it maps.
-const TUNABLE: &str = "glibc.malloc.hugetlb";
+/// The glibc tunables that put malloc's blocks on transparent huge pages: `hugetlb=1` makes malloc advise the
+/// kernel on the heap it grows (and the blocks it maps), and `arena_max=1` keeps every thread on that one heap —
+/// the other threads' arenas are heaps malloc does not advise, and builds and traces run on pool threads (measured:
+/// with `hugetlb` alone 14–50 MB of a run's 70–140 MB lay on huge pages, with both 110–145 MB of 135–170 MB).
+const TUNABLES: [(&str, &str); 2] = [("glibc.malloc.hugetlb", "1"), ("glibc.malloc.arena_max", "1")];
 
 /// Where the timing process's large blocks lie (the `huge_pages` column).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -71,21 +74,20 @@ fn version_has_tunable(version: &str) -> bool {
     (major, minor) >= (2, 35)
 }
 
-/// `tunables` (a `GLIBC_TUNABLES` value, `name=value` pairs joined by `:`) with the huge-page tunable set to 1
+/// `tunables` (a `GLIBC_TUNABLES` value, `name=value` pairs joined by `:`) with the huge-page tunables set
 /// (`huge`) or removed.
 fn with_tunable(tunables: &str, huge: bool) -> String {
-    let mut kept: Vec<&str> =
-        tunables.split(':').filter(|t| !t.is_empty() && t.split('=').next() != Some(TUNABLE)).collect();
-    let set = format!("{TUNABLE}=1");
+    let ours = |t: &&str| TUNABLES.iter().any(|(name, _)| t.split('=').next() == Some(name));
+    let mut kept: Vec<String> = tunables.split(':').filter(|t| !t.is_empty() && !ours(t)).map(str::to_string).collect();
     if huge {
-        kept.push(&set);
+        kept.extend(TUNABLES.iter().map(|(name, value)| format!("{name}={value}")));
     }
     kept.join(":")
 }
 
-/// Whether a `GLIBC_TUNABLES` value sets the huge-page tunable to 1.
+/// Whether a `GLIBC_TUNABLES` value sets every huge-page tunable.
 fn tunable_set(tunables: &str) -> bool {
-    tunables.split(':').any(|t| t == format!("{TUNABLE}=1"))
+    TUNABLES.iter().all(|(name, value)| tunables.split(':').any(|t| t == format!("{name}={value}")))
 }
 
 /// What this process got.
@@ -133,7 +135,7 @@ fn restart(huge: bool) {
     set_tunable(&mut cmd, huge);
     // `exec` returns only on failure.
     let error = cmd.exec();
-    note!("could not start again with {TUNABLE} ({error}); running on the pages as they are");
+    note!("could not start again with glibc's huge-page tunables ({error}); running on the pages as they are");
 }
 
 #[cfg(not(unix))]
@@ -151,18 +153,15 @@ mod tests {
     }
 
     #[test]
-    fn the_tunable_is_added_or_removed_beside_others() {
-        assert_eq!(with_tunable("", true), "glibc.malloc.hugetlb=1");
-        assert_eq!(with_tunable("glibc.malloc.arena_max=1", true), "glibc.malloc.arena_max=1:glibc.malloc.hugetlb=1");
-        assert_eq!(
-            with_tunable("glibc.malloc.hugetlb=0:glibc.malloc.arena_max=1", true),
-            "glibc.malloc.arena_max=1:glibc.malloc.hugetlb=1"
-        );
-        assert_eq!(with_tunable("glibc.malloc.hugetlb=1:glibc.malloc.arena_max=1", false), "glibc.malloc.arena_max=1");
-        assert!(
-            tunable_set(&with_tunable("a=1", true)) && !tunable_set(&with_tunable("glibc.malloc.hugetlb=1", false))
-        );
-        assert!(!tunable_set("glibc.malloc.hugetlb=2"), "2 asks for reserved pages, not transparent ones");
+    fn the_tunables_are_added_or_removed_beside_others() {
+        let both = "glibc.malloc.hugetlb=1:glibc.malloc.arena_max=1";
+        assert_eq!(with_tunable("", true), both);
+        assert_eq!(with_tunable("glibc.malloc.tcache_count=0", true), format!("glibc.malloc.tcache_count=0:{both}"));
+        assert_eq!(with_tunable("glibc.malloc.hugetlb=0:glibc.malloc.arena_max=4", true), both);
+        assert_eq!(with_tunable(&format!("{both}:glibc.malloc.tcache_count=0"), false), "glibc.malloc.tcache_count=0");
+        assert!(tunable_set(&with_tunable("a=1", true)) && !tunable_set(&with_tunable(both, false)));
+        assert!(!tunable_set("glibc.malloc.hugetlb=1"), "arena_max too");
+        assert!(!tunable_set("glibc.malloc.hugetlb=2:glibc.malloc.arena_max=1"), "2 asks for reserved pages");
     }
 
     #[test]
