@@ -10,10 +10,10 @@ use clap::{Args, Parser, Subcommand};
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
-    /// Run on 4-KiB pages: by default glibc's malloc puts every backend's large blocks on transparent huge pages,
-    /// as Embree's allocator does its own (the `huge_pages` column; docs/statistics.md).
+    /// Put every backend's large blocks on transparent huge pages (glibc's malloc tunables), as Embree's allocator
+    /// puts its own: measured on and off in docs/statistics.md, not the default (the `huge_pages` column).
     #[arg(long, global = true)]
-    pub small_pages: bool,
+    pub huge_pages: bool,
 }
 
 #[derive(Subcommand, Debug)]

@@ -47,7 +47,7 @@ pub fn main() -> ExitCode {
     let cli = cli::Cli::parse();
     // A worker runs on the pages its parent chose (it inherits the environment; its arguments do not say).
     if !matches!(cli.command, Command::Worker) {
-        pages::ensure(!cli.small_pages);
+        pages::ensure(cli.huge_pages);
     }
     let result = match cli.command {
         Command::Run(args) => run_command(&args),

@@ -1,12 +1,12 @@
-//! Transparent huge pages for every backend's memory, not only Embree's.
+//! Transparent huge pages for every backend's memory, not only Embree's (`--huge-pages`).
 //!
 //! Embree's allocator asks the kernel for transparent huge pages on its large blocks; our structures, obvhs's and
 //! tinybvh's allocate through glibc's malloc, which asks only when its tunables say so (glibc 2.35 and later).
-//! Under the kernel's usual `madvise` mode that left Embree alone on 2-MiB pages, and left two series of one
-//! process with a speed offset fixed by where their 4-KiB pages happened to lie (docs/statistics.md). glibc reads
-//! its tunables once, when a process starts, so [`ensure`] starts the harness again with them set before it does
-//! anything else; the workers it starts inherit them. `--small-pages` runs without, and every row says which it
-//! got (`huge_pages`).
+//! Under the kernel's usual `madvise` mode Embree alone gets 2-MiB pages. glibc reads its tunables once, when a
+//! process starts, so [`ensure`] starts the harness again with them set (or removed) before it does anything
+//! else; the workers it starts inherit them. Every row says which it got (`huge_pages`). Measured on and off
+//! (docs/statistics.md): they did not remove the offset between two series of one process, and cost our
+//! two-thread builds about 7%, so they are a setting to measure with, not the default.
 
 use std::ffi::OsString;
 

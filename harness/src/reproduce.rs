@@ -61,16 +61,19 @@ fn recorded_origin(dir: &Path) -> Result<Origin, Error> {
     })
 }
 
-/// Runs `cmd` (a `harness run` of `binary`) on the pages the rows were recorded on: glibc's huge-page tunable set
-/// or removed (a harness older than the `huge_pages` column keeps what it is given), and `--small-pages` for a
-/// harness that would otherwise set it itself.
+/// Runs `cmd` (a `harness run` of `binary`) on the pages the rows were recorded on: glibc's huge-page tunables set
+/// or removed (a harness older than the `huge_pages` column keeps what it is given), and the flag that tells a
+/// harness which have one (`--huge-pages`; 6fa44aa and d131eb6 put them on unless told `--small-pages`).
 fn on_recorded_pages(cmd: &mut Command, binary: &Path, huge: bool) {
     crate::pages::set_tunable(cmd, huge);
-    let knows_small_pages = Command::new(binary)
+    let help = Command::new(binary)
         .args(["run", "--help"])
         .output()
-        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).contains("--small-pages"));
-    if !huge && knows_small_pages {
+        .map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
+        .unwrap_or_default();
+    if huge && help.contains("--huge-pages") {
+        cmd.arg("--huge-pages");
+    } else if !huge && help.contains("--small-pages") {
         cmd.arg("--small-pages");
     }
 }

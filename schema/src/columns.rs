@@ -254,11 +254,11 @@ declare_columns! {
         /// ticks); a long sample (`sample_ms`) that saw steal is taken again, up to 3 times, keeping the one with the
         /// least. Empty for one-pass samples, where the kernel does not report it, and in earlier rows.
         steal_s: Option<f64>, Metric, unit "s", decimals 2, added 10;
-        /// Whether the timing process's large blocks lay on transparent huge pages: `malloc` (glibc's malloc asked
-        /// for them, `GLIBC_TUNABLES=glibc.malloc.hugetlb=1:glibc.malloc.arena_max=1`, for every backend that
-        /// allocates through it; Embree's allocator asks on its own), `always` (the kernel gives them to every large mapping), `no` (4-KiB pages but
-        /// for Embree's own requests: `--small-pages`, the kernel's mode `never`, or no glibc 2.35+); `-` in rows
-        /// recorded before this column.
+        /// Whether the timing process's large blocks lay on transparent huge pages: `malloc` (`--huge-pages`:
+        /// glibc's malloc asked for them, `GLIBC_TUNABLES=glibc.malloc.hugetlb=1:glibc.malloc.arena_max=1`, for every
+        /// backend that allocates through it; Embree's allocator asks on its own), `always` (the kernel gives them to
+        /// every large mapping), `no` (4-KiB pages but for Embree's own requests: the default, the kernel's mode
+        /// `never`, or no glibc 2.35+); `-` in rows recorded before this column.
         huge_pages: String, Provenance = "-".to_string(), added 12;
     }
 }
