@@ -119,6 +119,9 @@ pub struct Experiment {
     /// The shortest timed sample, in seconds (`sample_ms`): each timed run traces its job again until this much
     /// time has passed and records the mean per pass (0: one pass).
     pub sample_s: f64,
+    /// Processes each configuration is timed in (`processes`): its timed runs take turns between that many worker
+    /// processes of its own, so that what lasts a process's life varies between its runs (1: one process).
+    pub processes: u32,
     pub sweep: AxisValues,
     /// `sweep.sphere_file`, resolved against the config's folder.
     pub sphere_file: Option<PathBuf>,
@@ -142,6 +145,7 @@ const TOP_KEYS: &[&str] = &[
     "order",
     "order_seed",
     "sample_ms",
+    "processes",
     "sweep",
     "series",
     "exclude",
@@ -271,6 +275,7 @@ impl Experiment {
             order: parse_order(&top)?,
             order_seed: top.integer("order_seed", 0, i64::MAX)?.unwrap_or(0) as u64,
             sample_s: sample_seconds(&top)?.unwrap_or(0.0),
+            processes: top.integer("processes", 1, 64)?.unwrap_or(1) as u32,
             sweep,
             sphere_file: sweep_section.string("sphere_file")?.map(|f| dir.join(f)),
             exclude: parse_excludes(&top, &labels)?,
@@ -580,6 +585,15 @@ mod tests {
         let serial_list =
             "accel,split,leaf_size,sah_bins,reinsertion,traversal,strategy,threads,obvhs_build,embree_build,embree_isa";
         fixes("s", serial_list, "objects,seed");
+    }
+
+    #[test]
+    fn processes_default_to_one_and_are_bounded() {
+        let parse = |extra: &str| Experiment::parse(Path::new("t.toml"), &format!("name = \"t\"\n{extra}[sweep]\n"));
+        assert_eq!(parse("").unwrap().processes, 1);
+        assert_eq!(parse("processes = 4\n").unwrap().processes, 4);
+        let e = parse("processes = 0\n").unwrap_err().to_string();
+        assert!(e.starts_with("t.toml: processes:") && e.contains("1..=64"), "{e}");
     }
 
     #[test]

@@ -27,8 +27,11 @@ pub(super) struct ConfigurationState<'a> {
     pub checked: Option<Checked>,
     /// True once it failed validation (recorded once, never timed).
     pub failed: bool,
-    /// Where it is timed, from its first timed run to its last.
-    runner: Option<Runner>,
+    /// Where it is timed, from its first timed run to its last: one runner, or the experiment's `processes`
+    /// workers, started as their turns come.
+    runners: Vec<Option<Runner>>,
+    /// Its timed runs so far in this sweep (which runner is next).
+    turns: usize,
     /// The runs it still has in this sweep.
     pub pending: Pending,
 }
@@ -49,7 +52,8 @@ impl<'a> Sweep<'a> {
                 configuration,
                 checked: None,
                 failed: false,
-                runner: None,
+                runners: Vec::new(),
+                turns: 0,
                 pending: Pending::default(),
             })
             .collect();
@@ -123,9 +127,14 @@ impl<'a> Sweep<'a> {
         let mut turns = Vec::new();
         for ((_, state), rays) in picked.iter_mut().zip(&rays) {
             let c = state.configuration;
-            turns.push(match state.runner()? {
+            let processes = self.exp.processes;
+            let (runner, fresh) = state.runner(processes)?;
+            turns.push(match runner {
                 Runner::Worker(worker) => {
                     let request = worker_request(plan, c);
+                    if fresh && processes > 1 {
+                        worker.time(&request)?; // its own warm-up: every process's runs are warm
+                    }
                     worker.step::<()>(&request, Step::Prepare)?;
                     Turn::Worker { worker, request }
                 }
@@ -168,18 +177,28 @@ impl Turn<'_> {
 }
 
 impl ConfigurationState<'_> {
-    /// Where it is timed, started on its first timed run.
-    fn runner(&mut self) -> Result<&mut Runner, Error> {
-        if self.runner.is_none() {
-            self.runner = Some(if backend::of(self.configuration.settings.accel).own_threads() {
-                let exe = std::env::current_exe()
-                    .map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
-                Runner::Worker(Worker::start(&exe, None)?)
-            } else {
-                Runner::Here(Setup::start(&self.configuration.settings)?)
-            });
+    /// Where its next run is timed, started on its first turn: in this process, or in a worker of its own (a
+    /// backend with threads of its own, as Embree; or every backend, in turn over `processes` workers).
+    /// Returns it, and whether it was started for this run.
+    fn runner(&mut self, processes: u32) -> Result<(&mut Runner, bool), Error> {
+        let processes = processes.max(1) as usize;
+        let turn = self.turns % processes;
+        self.turns += 1;
+        if self.runners.len() < processes {
+            self.runners.resize_with(processes, || None);
         }
-        Ok(self.runner.as_mut().expect("started above"))
+        let fresh = self.runners[turn].is_none();
+        if fresh {
+            self.runners[turn] =
+                Some(if processes > 1 || backend::of(self.configuration.settings.accel).own_threads() {
+                    let exe = std::env::current_exe()
+                        .map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
+                    Runner::Worker(Worker::start(&exe, None)?)
+                } else {
+                    Runner::Here(Setup::start(&self.configuration.settings)?)
+                });
+        }
+        Ok((self.runners[turn].as_mut().expect("started above"), fresh))
     }
 
     /// Marks it failed and lets its runs go.
@@ -190,7 +209,7 @@ impl ConfigurationState<'_> {
 
     /// Ends it: its worker process, pool and device go, and it expects no more runs.
     pub fn finish(&mut self) {
-        self.runner = None;
+        self.runners.clear();
         self.pending.warmups = 0;
         self.pending.repetitions = 0;
     }
