@@ -18,6 +18,8 @@ pub(super) struct Sweep<'a> {
     exp: &'a Experiment,
     pub states: Vec<ConfigurationState<'a>>,
     pub sampler: Sampler,
+    /// Calls of [`Sweep::time`] so far.
+    clock: u64,
 }
 
 /// One configuration through the sweep.
@@ -32,6 +34,9 @@ pub(super) struct ConfigurationState<'a> {
     runners: Vec<Option<Runner>>,
     /// Its timed runs so far in this sweep (which runner is next).
     turns: usize,
+    /// When it was last timed (the sweep's count of [`Sweep::time`] calls), to end the workers of the configuration
+    /// idle longest when memory runs low.
+    last_timed: u64,
     /// The runs it still has in this sweep.
     pub pending: Pending,
 }
@@ -54,6 +59,7 @@ impl<'a> Sweep<'a> {
                 failed: false,
                 runners: Vec::new(),
                 turns: 0,
+                last_timed: 0,
                 pending: Pending::default(),
             })
             .collect();
@@ -64,7 +70,7 @@ impl<'a> Sweep<'a> {
         } else {
             vec![None; plan.configurations.len()]
         };
-        Sweep { exp, states, sampler: Sampler::new(exp.repetitions, reference) }
+        Sweep { exp, states, sampler: Sampler::new(exp.repetitions, reference), clock: 0 }
     }
 
     /// The metric whose interval decides `c`'s repetitions.
@@ -119,6 +125,11 @@ impl<'a> Sweep<'a> {
     /// alone is one run as it always was). Several are the series of one point in an interleaved round with
     /// `sample_ms`.
     pub fn time(&mut self, configs: &[usize], plan: &Plan, bank: &mut RayBank) -> Result<Vec<Timing>, Error> {
+        self.clock += 1;
+        for &i in configs {
+            self.states[i].last_timed = self.clock;
+        }
+        self.make_room(configs);
         let rays: Vec<_> =
             configs.iter().map(|&i| workload_rays(plan, &self.states[i].configuration.settings, bank)).collect();
         let mut picked: Vec<(usize, &mut ConfigurationState<'a>)> =
@@ -149,6 +160,37 @@ impl<'a> Sweep<'a> {
         let n = turns.len() as u32;
         turns.into_iter().zip(passes).map(|(turn, passes)| turn.finish(passes, steal_s, n)).collect()
     }
+}
+
+impl Sweep<'_> {
+    /// With `processes` above 1 every configuration keeps its workers from its first run to its last, and an
+    /// interleaved sweep's configurations all live at once: while less than a quarter of the machine's memory is
+    /// available, the workers of the configuration idle longest (not one of `configs`) end; they start again, and
+    /// are warmed again, on its next turn.
+    fn make_room(&mut self, configs: &[usize]) {
+        if self.exp.processes <= 1 {
+            return;
+        }
+        while memory_low() {
+            let idle = (0..self.states.len())
+                .filter(|i| !configs.contains(i) && self.states[*i].runners.iter().any(Option::is_some))
+                .min_by_key(|&i| self.states[i].last_timed);
+            let Some(i) = idle else { return };
+            self.states[i].runners.clear();
+        }
+    }
+}
+
+/// True while the kernel counts less than a quarter of the machine's memory available (`/proc/meminfo`; false where
+/// it does not say).
+fn memory_low() -> bool {
+    let info = std::fs::read_to_string("/proc/meminfo").unwrap_or_default();
+    let kib = |key: &str| {
+        info.lines()
+            .find_map(|l| l.strip_prefix(key))
+            .and_then(|rest| rest.split_whitespace().next()?.parse::<u64>().ok())
+    };
+    matches!((kib("MemAvailable:"), kib("MemTotal:")), (Some(available), Some(total)) if available < total / 4)
 }
 
 /// A configuration's run taken pass by pass: a trial in this process, or one in its worker.
