@@ -149,7 +149,7 @@ fn list(shards: &BTreeSet<usize>) -> String {
 }
 
 /// Fails when `column` takes more than one value over the shards' rows, naming them and their shards.
-fn agree(run_dir: &Path, shards: &[Shard], column: &str, what: &str) -> Result<(), Error> {
+fn agree(run_dir: &Path, shards: &[Shard], column: &str, what: &str, remedy: &str) -> Result<(), Error> {
     let mut values: BTreeMap<String, BTreeSet<usize>> = BTreeMap::new();
     for s in shards {
         for r in &s.rows {
@@ -159,7 +159,7 @@ fn agree(run_dir: &Path, shards: &[Shard], column: &str, what: &str) -> Result<(
     if values.len() > 1 {
         let each: Vec<String> = values.iter().map(|(v, shards)| format!("{v:?} (shards {})", list(shards))).collect();
         return Err(Error::Input(format!(
-            "{}: shards come from different {what}: {column} {} (allowed: one; rerun the odd shards with one build)",
+            "{}: shards come from different {what}: {column} {} (allowed: one; {remedy})",
             run_dir.display(),
             each.join(", ")
         )));
@@ -256,8 +256,17 @@ pub fn run(run_dir: &Path, allow_mixed_machines: bool) -> Result<(), Error> {
             )));
         }
     }
-    agree(run_dir, &shards, column::git_commit, "commits")?;
-    agree(run_dir, &shards, column::cargo_lock, "Cargo.lock files")?;
+    let rebuild = "rerun the odd shards with one build";
+    agree(run_dir, &shards, column::git_commit, "commits", rebuild)?;
+    agree(run_dir, &shards, column::cargo_lock, "Cargo.lock files", rebuild)?;
+    // Not part of a point's key: shards on other pages would pool into one point.
+    agree(
+        run_dir,
+        &shards,
+        column::huge_pages,
+        "pages",
+        "rerun the odd shards with or without --huge-pages as the others",
+    )?;
     let machines = machines(&shards);
     let described: Vec<String> = machines
         .iter()

@@ -120,6 +120,22 @@ fn open_log(exp: &Experiment, dir: &Path, existing: Existing) -> Result<(RowLog,
     Ok((RowLog::create(&runs).map_err(|e| io("create", &runs, e))?, Vec::new()))
 }
 
+/// Refuses to continue rows timed on other pages than this process's: `huge_pages` is not part of a point's
+/// key (older rows say `-`, recorded before the column, when every run used 4-KiB pages), so a resumed run that
+/// switched `--huge-pages` on or off would pool both into one point.
+fn refuse_mixed_pages(dir: &Path, recorded: &[Row], pages: &str) -> Result<(), Error> {
+    let spelled = |p: &str| if p == "-" { "no" } else { p }.to_string();
+    match recorded.iter().map(|r| spelled(&r.huge_pages)).find(|p| *p != spelled(pages)) {
+        Some(theirs) => Err(Error::Input(format!(
+            "{}: huge_pages: its rows were timed with `{theirs}` and this run has `{pages}`; resume with{} \
+             --huge-pages (allowed: the pages its rows were timed on), or run without --resume to start over",
+            dir.join(RUNS_CSV).display(),
+            if theirs == "no" { "out" } else { "" }
+        ))),
+        None => Ok(()),
+    }
+}
+
 fn describe(c: &Configuration) -> String {
     let s = &c.settings;
     format!("{} {} objects={} seed={} {}", c.series, schema::Named::name(s.workload), s.objects, s.seed, s.strategy())
@@ -313,6 +329,7 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, existing: Existing) -> R
     let provenance = Provenance::collect();
     let recording = Recording { exp, provenance: &provenance, shard: plan.shard };
     let (mut log, recorded) = open_log(exp, dir, existing)?;
+    refuse_mixed_pages(dir, &recorded, &provenance.huge_pages)?;
     let mut append = |row: &Row| {
         log.append(row).map_err(|e| Error::Run(format!("{}: cannot append a row: {e}", dir.join(RUNS_CSV).display())))
     };

@@ -395,6 +395,29 @@ fn a_killed_sweep_resumes_without_losing_or_duplicating_rows() {
     assert!(o.status.success());
     assert_eq!(recorded(&runs).len(), 24);
 
+    // Resuming rows timed on other pages is refused (`huge_pages` is not part of a point's key), and nothing is
+    // written.
+    let text = std::fs::read_to_string(&runs).unwrap();
+    let pages = text.lines().next().unwrap().split(',').position(|h| h == "huge_pages").unwrap();
+    let lines: Vec<String> = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            let mut cells: Vec<&str> = l.split(',').collect();
+            if i > 0 {
+                cells[pages] = "always";
+            }
+            cells.join(",")
+        })
+        .collect();
+    let on_huge_pages = lines.join("\n") + "\n";
+    std::fs::write(&runs, &on_huge_pages).unwrap();
+    let o =
+        harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--resume"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("huge_pages") && stderr(&o).lines().count() == 1, "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(&runs).unwrap(), on_huge_pages, "nothing written");
+
     // Resuming with another config is refused.
     std::fs::write(&cfg, "name = \"resume\"\nrepetitions = 5\n[sweep]\nobjects = [400]\n").unwrap();
     let o =

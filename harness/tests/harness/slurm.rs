@@ -296,6 +296,17 @@ fn merge_equals_the_unsharded_run_and_refuses_bad_shards() {
     let run = case("commits", &|r| edit(r.join("shard-2-of-3/runs.csv"), &|t| t.replace(&row.git_commit, "0badc0de")));
     refused(&merge(&run, &[]), &run, "shards come from different commits");
 
+    let run = case("pages", &|r| {
+        edit(r.join("shard-2-of-3/runs.csv"), &|t| {
+            let mut rows = schema::row::read_rows(&t).unwrap();
+            rows.iter_mut().for_each(|row| row.huge_pages = "always".into());
+            schema::row::header()
+                + "\n"
+                + &rows.iter().map(|row| schema::row::csv_line(row).unwrap()).collect::<String>()
+        })
+    });
+    refused(&merge(&run, &[]), &run, "shards come from different pages: huge_pages");
+
     let run =
         case("machines", &|r| edit(r.join("shard-3-of-3/runs.csv"), &|t| t.replace(&row.machine_id, "0000deadbeef")));
     refused(&merge(&run, &[]), &run, "rows of 2 machines: ");
