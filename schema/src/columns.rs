@@ -260,6 +260,11 @@ declare_columns! {
         /// every large mapping), `no` (4-KiB pages but for Embree's own requests: the default, the kernel's mode
         /// `never`, or no glibc 2.35+); `-` in rows recorded before this column.
         huge_pages: String, Provenance = "-".to_string(), added 12;
+        /// The operating system's id of the process that timed the run: the harness, or the worker it ran in
+        /// (every backend with `processes` above 1, which take turns between that many workers; Embree always).
+        /// Runs of one process share its offset (the layout its memory happened to get), so the intervals resample
+        /// processes, not runs, where a series was timed in several. 0 for untimed runs and in earlier rows.
+        process_id: u32, Provenance = 0, added 13;
     }
 }
 

@@ -44,6 +44,10 @@ pub struct Timing {
     /// `None` where the kernel does not report it and in answers of earlier workers.
     #[serde(default)]
     pub steal_s: Option<f64>,
+    /// The operating system's id of the process that timed it (this one or a worker); 0 in answers of earlier
+    /// workers.
+    #[serde(default)]
+    pub process_id: u32,
     /// Image hash (render) or ray-set answer hash.
     pub output_hash: u64,
     pub scene_fingerprint: u64,
@@ -195,6 +199,7 @@ impl Trial {
             trace_passes,
             sample_configs,
             steal_s,
+            process_id: std::process::id(),
             output_hash: output.hash(),
             scene_fingerprint: self.scene.fingerprint(),
             stats: self.built.structure.stats(),
@@ -237,6 +242,7 @@ impl Timing {
             trace_passes: 0,
             sample_configs: 0,
             steal_s: None,
+            process_id: 0,
             output_hash,
             scene_fingerprint: 0,
             stats: Default::default(),
@@ -446,6 +452,7 @@ mod tests {
             trace_passes: 3,
             sample_configs: 2,
             steal_s: Some(0.01),
+            process_id: 4242,
             output_hash: 0xdead_beef_0123_4567,
             scene_fingerprint: 42,
             stats: TreeStats { nodes: 7, leaves: 4, depth: 2, bytes: 1024, sah_cost: 3.5 },

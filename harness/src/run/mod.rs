@@ -261,6 +261,7 @@ fn row(r: &Recording, c: &Configuration, rep: u32, t: &Timing, v: &Checked, star
     row.trace_passes = t.trace_passes;
     row.sample_configs = t.sample_configs;
     row.steal_s = t.steal_s;
+    row.process_id = t.process_id;
     row.encode_s = metric(t.encode_s);
     row.total_s = metric(t.total_s());
     row.rays = w.rays;

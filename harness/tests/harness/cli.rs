@@ -1,6 +1,6 @@
 //! The harness as a user runs it: bad configs, a killed and resumed sweep, and the quick paper experiment.
 
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -423,6 +423,42 @@ fn a_killed_sweep_resumes_without_losing_or_duplicating_rows() {
     let o =
         harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--resume"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}
+
+/// With `processes = 3` each configuration's runs take turns between three workers of its own: every row names
+/// the process that timed it, run `r` and run `r + 3` the same one, no two configurations share one.
+#[test]
+fn with_processes_each_configuration_takes_turns_between_its_own_workers() {
+    let dir = temp("processes");
+    let cfg = dir.join("processes.toml");
+    std::fs::write(
+        &cfg,
+        "name = \"processes\"\nrepetitions = 6\nprocesses = 3\n[sweep]\nobjects = [10, 20]\nwidth = 32\nheight = 16\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let runs = out.join("runs.csv");
+    let (configs, reps, ids) = (column(&runs, "config_id"), column(&runs, "repetition"), column(&runs, "process_id"));
+    assert_eq!(ids.len(), 12);
+    let mut by_config: HashMap<&str, HashMap<u32, &str>> = HashMap::new();
+    for ((config, rep), id) in configs.iter().zip(&reps).zip(&ids) {
+        assert_ne!(id, "0", "a timed row names its process");
+        assert_ne!(id.parse::<u32>().unwrap(), std::process::id());
+        by_config.entry(config).or_default().insert(rep.parse().unwrap(), id);
+    }
+    assert_eq!(by_config.len(), 2);
+    let mut all = HashSet::new();
+    for turns in by_config.values() {
+        for r in 0..3 {
+            assert_eq!(turns[&r], turns[&(r + 3)], "run {r} and run {} in one process: {turns:?}", r + 3);
+        }
+        let own: HashSet<&str> = (0..3).map(|r| turns[&r]).collect();
+        assert_eq!(own.len(), 3, "three processes: {turns:?}");
+        all.extend(own);
+    }
+    assert_eq!(all.len(), 6, "no process shared between configurations");
 }
 
 /// Runs into a folder that holds rows never lose them: each earlier run moves into `previous/` (older ones into
