@@ -133,9 +133,20 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
         "- Statistics: medians over repetitions (and seeds where pooled); intervals are the median's distribution-free \
          95% interval (order statistics; none below {} values, shown as —), for a ratio of two series that ran in the \
          same rounds that of the median of their per-round ratios, else a 95% percentile bootstrap ({} resamples) \
-         of the ratio of medians\n",
+         of the ratio of medians{}\n",
         stats::MIN_SAMPLES_FOR_INTERVAL,
-        stats::RESAMPLES
+        stats::RESAMPLES,
+        if runs.iter().map(|r| r.row.process_id).collect::<std::collections::HashSet<_>>().len() > 2 {
+            format!(
+                "; where the rounds ran in {} or more pairs of processes (`processes`, `process_id`), that interval \
+                 resamples processes, not rounds (a cluster bootstrap, {} resamples: rounds of one process share its \
+                 offset)",
+                stats::MIN_SAMPLES_FOR_INTERVAL,
+                stats::RESAMPLES
+            )
+        } else {
+            String::new()
+        }
     );
     let over = runs.iter().filter(|r| r.num(column::threads) > r.num(column::logical_cores)).count();
     if over > 0 {

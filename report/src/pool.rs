@@ -85,9 +85,16 @@ pub fn counterparts<'a>(
 /// The runs of `group` each paired with its one counterpart in series `other` from the same round: equal on every
 /// setting but those the series fix (seeds included, whatever `ratio_against` ignores) and on `repetition`. `None`
 /// unless every run of the group and every counterpart has exactly one partner, and both sides have `metric`.
-fn rounds(spec: &ReportSpec, runs: &[Run], other: &str, group: &[&Run], metric: &str) -> Option<(Vec<f64>, Vec<f64>)> {
+/// The third list names each round's pair of processes (`process_id` of both sides).
+fn rounds(
+    spec: &ReportSpec,
+    runs: &[Run],
+    other: &str,
+    group: &[&Run],
+    metric: &str,
+) -> Option<(Vec<f64>, Vec<f64>, Vec<u64>)> {
     let mut taken = std::collections::HashSet::new();
-    let mut pairs = (Vec::new(), Vec::new());
+    let mut pairs = (Vec::new(), Vec::new(), Vec::new());
     for run in group {
         let mut partners = runs.iter().enumerate().filter(|(_, candidate)| {
             candidate.series() == other
@@ -101,13 +108,38 @@ fn rounds(spec: &ReportSpec, runs: &[Run], other: &str, group: &[&Run], metric: 
         }
         pairs.0.push(a);
         pairs.1.push(b);
+        pairs.2.push(u64::from(partner.row.process_id) << 32 | u64::from(run.row.process_id));
     }
     Some(pairs)
 }
 
+/// The per-round ratios of two series timed in the same rounds, each with the pair of processes that timed it.
+#[derive(Clone, Debug)]
+pub struct RoundRatios {
+    /// `metric(other) / metric(group)`, one per round.
+    pub ratios: Vec<f64>,
+    /// The processes of each round (both sides' `process_id`): rounds of one pair share their offsets.
+    pub processes: Vec<u64>,
+}
+
+impl RoundRatios {
+    /// Their median with its 95% interval: resampling processes ([`stats::clustered_ratio_ci`]) where the rounds
+    /// ran in at least [`stats::MIN_SAMPLES_FOR_INTERVAL`] pairs of processes (`processes` in the config), else
+    /// the rounds' distribution-free interval ([`stats::median_ci`], which does not carry an offset of the one
+    /// or few processes they ran in; docs/statistics.md, "Processes"). `key` seeds the bootstrap.
+    pub fn estimate(&self, key: &str) -> Estimate {
+        let distinct: std::collections::HashSet<&u64> = self.processes.iter().collect();
+        if distinct.len() >= stats::MIN_SAMPLES_FOR_INTERVAL {
+            stats::clustered_ratio_ci(&self.ratios, &self.processes, stats::seed_for(key))
+        } else {
+            stats::median_ci(&self.ratios)
+        }
+    }
+}
+
 /// The per-round ratios `metric(other) / metric(group)` where the two series ran in the same rounds (see
 /// [`rounds`]; at least two rounds, every sample of both sides paired), else `None`.
-pub fn round_ratios(spec: &ReportSpec, runs: &[Run], other: &str, group: &[&Run], metric: &str) -> Option<Vec<f64>> {
+pub fn round_ratios(spec: &ReportSpec, runs: &[Run], other: &str, group: &[&Run], metric: &str) -> Option<RoundRatios> {
     let partners = samples(counterparts(spec, runs, other, group, &[column::seed]), metric).len();
     paired_ratios(spec, runs, other, group, metric, partners)
 }
@@ -120,18 +152,18 @@ fn paired_ratios(
     group: &[&Run],
     metric: &str,
     partners: usize,
-) -> Option<Vec<f64>> {
+) -> Option<RoundRatios> {
     if partners != group.len() || partners < 2 {
         return None;
     }
-    let (num, den) = rounds(spec, runs, other, group, metric)?;
-    Some(num.iter().zip(&den).map(|(n, d)| n / d).collect())
+    let (num, den, processes) = rounds(spec, runs, other, group, metric)?;
+    Some(RoundRatios { ratios: num.iter().zip(&den).map(|(n, d)| n / d).collect(), processes })
 }
 
 /// `metric(other) / metric(group)` at one point, with its interval; `None` when there is no counterpart or no
 /// sample. Where the two series ran in the same rounds (every run has one counterpart of the same repetition,
-/// see [`rounds`]) it is the median of the per-round ratios with its distribution-free interval (as
-/// [`stats::paired_ratio_ci`]); otherwise the ratio of the two medians, each side resampled on its own
+/// see [`rounds`]) it is the median of the per-round ratios with its interval ([`RoundRatios::estimate`]:
+/// processes resampled where the rounds ran in several); otherwise the ratio of the two medians, each side resampled on its own
 /// ([`stats::ratio_ci`]). `key` seeds the bootstrap.
 pub fn ratio_against(
     spec: &ReportSpec,
@@ -150,7 +182,7 @@ pub fn ratio_against(
     if numerator.len() == denominator.len()
         && let Some(ratios) = paired_ratios(spec, runs, other, group, metric, numerator.len())
     {
-        return Some(stats::median_ci(&ratios));
+        return Some(ratios.estimate(key));
     }
     Some(stats::ratio_ci(&numerator, &denominator, stats::seed_for(key)))
 }

@@ -398,9 +398,9 @@ pub(crate) fn speedups(
                     pool::round_ratios(spec, old, reference, old_group, metric),
                 );
                 let (old_e, new_e, ratio, lo, hi) = if let (Some(r_new), Some(r_old)) = paired {
-                    let old_e = stats::median_ci(&r_old);
-                    let new_e = stats::median_ci(&r_new);
-                    let change = stats::ratio_ci(&r_new, &r_old, stats::seed_for(&key));
+                    let old_e = r_old.estimate(&format!("{key}|old"));
+                    let new_e = r_new.estimate(&format!("{key}|new"));
+                    let change = stats::ratio_ci(&r_new.ratios, &r_old.ratios, stats::seed_for(&key));
                     (old_e, new_e, change.value, change.lo, change.hi)
                 } else {
                     let old_e = stats::ratio_ci(&ref_old, &ser_old, stats::seed_for(&format!("{key}|old")));
