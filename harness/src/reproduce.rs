@@ -61,19 +61,15 @@ fn recorded_origin(dir: &Path) -> Result<Origin, Error> {
     })
 }
 
-/// Runs `cmd` (a `harness run` of `binary`) on the pages the rows were recorded on: glibc's huge-page tunables set
-/// or removed (a harness older than the `huge_pages` column keeps what it is given), and the flag that tells a
-/// harness which have one (`--huge-pages`; 6fa44aa and d131eb6 put them on unless told `--small-pages`).
-fn on_recorded_pages(cmd: &mut Command, binary: &Path, huge: bool) {
+/// Runs `cmd` (a `harness run`) on the pages the rows were recorded on: glibc's huge-page tunables set or removed (a
+/// harness older than the `huge_pages` column keeps what it is given), and the flag that tells a harness which have
+/// one, read from its `cli.rs` (`cli_source`): `--huge-pages`, or `--small-pages` where 6fa44aa and d131eb6 put them
+/// on by default.
+fn on_recorded_pages(cmd: &mut Command, cli_source: &str, huge: bool) {
     crate::pages::set_tunable(cmd, huge);
-    let help = Command::new(binary)
-        .args(["run", "--help"])
-        .output()
-        .map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
-        .unwrap_or_default();
-    if huge && help.contains("--huge-pages") {
+    if huge && cli_source.contains("pub huge_pages: bool") {
         cmd.arg("--huge-pages");
-    } else if !huge && help.contains("--small-pages") {
+    } else if !huge && cli_source.contains("pub small_pages: bool") {
         cmd.arg("--small-pages");
     }
 }
@@ -150,13 +146,14 @@ pub fn run(args: &ReproduceArgs) -> Result<(), Error> {
     // The recorded commit's harness runs in a checkout of that commit: its rows record the commit (the harness reads
     // it from the folder it runs in), and the config's relative paths mean what they meant then.
     let mut checkout: Option<Worktree<'_>> = None;
-    let (binary, at) = match args.at {
+    let (binary, at, cli_source) = match args.at {
         ReproduceAt::Recorded => {
             let build = Build::running()?;
             let binary = base_binary(&root, &build, &commit)?;
             let path = build.target.join("ab").join(format!("reproduce-{}-{}", short(&commit), std::process::id()));
             checkout = Some(Worktree::add(&root, path, &commit)?);
-            (binary, format!("recorded commit {}", short(&commit)))
+            let cli = git(&root, &["show", &format!("{commit}:harness/src/cli.rs")]).unwrap_or_default();
+            (binary, format!("recorded commit {}", short(&commit)), cli)
         }
         ReproduceAt::Head => (
             std::env::current_exe().map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?,
@@ -165,6 +162,7 @@ pub fn run(args: &ReproduceArgs) -> Result<(), Error> {
                 short(&here.git_commit),
                 if here.git_dirty { ", with uncommitted changes" } else { "" }
             ),
+            include_str!("cli.rs").to_string(),
         ),
     };
     let date = provenance::timestamp_now().chars().take(10).collect::<String>();
@@ -214,7 +212,7 @@ pub fn run(args: &ReproduceArgs) -> Result<(), Error> {
     if args.quick {
         cmd.arg("--quick");
     }
-    on_recorded_pages(&mut cmd, &binary, huge_pages);
+    on_recorded_pages(&mut cmd, &cli_source, huge_pages);
     let status = cmd.status().map_err(|e| Error::Run(format!("{}: {e}", binary.display())))?;
     if !status.success() {
         return Err(Error::Run(format!(
@@ -284,4 +282,28 @@ pub fn run(args: &ReproduceArgs) -> Result<(), Error> {
         )));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn flags(cli_source: &str, huge: bool) -> Vec<String> {
+        let mut cmd = Command::new("harness");
+        on_recorded_pages(&mut cmd, cli_source, huge);
+        cmd.get_args().map(|a| a.to_string_lossy().into_owned()).collect()
+    }
+
+    #[test]
+    fn the_recorded_harness_gets_the_flag_its_cli_has() {
+        let today = include_str!("cli.rs");
+        assert_eq!(flags(today, true), ["--huge-pages"]);
+        assert!(flags(today, false).is_empty(), "small pages are the default");
+        // 6fa44aa and d131eb6 put huge pages on unless told `--small-pages`.
+        let on_by_default = "    /// ...\n    #[arg(long, global = true)]\n    pub small_pages: bool,\n";
+        assert_eq!(flags(on_by_default, false), ["--small-pages"]);
+        assert!(flags(on_by_default, true).is_empty());
+        // Older harnesses have neither: the tunables alone.
+        assert!(flags("", true).is_empty() && flags("", false).is_empty());
+    }
 }
