@@ -13,8 +13,8 @@ use crate::merge::read_log;
 use crate::run::RUNS_CSV;
 
 /// Provenance that differs from run to run of one build on one machine; ignored with the timings.
-pub const PER_RUN: [&str; 5] =
-    [column::load_avg_1m, column::timestamp, column::shard, column::slurm_job_id, column::node];
+pub const PER_RUN: [&str; 6] =
+    [column::load_avg_1m, column::timestamp, column::shard, column::slurm_job_id, column::node, column::process_id];
 
 /// The columns compared: all, or all but the timings and [`PER_RUN`].
 pub fn compared(ignore_timing: bool) -> Vec<&'static str> {
