@@ -84,6 +84,16 @@ fn distinct(runs: &[Run], column: &str) -> String {
     values.into_iter().collect::<Vec<_>>().join(", ")
 }
 
+/// Whether some configuration's runs took turns between enough processes (`processes`) that its ratios' intervals
+/// resample processes ([`crate::pool::RoundRatios::estimate`]).
+fn timed_in_several_processes(runs: &[Run]) -> bool {
+    let mut by_config: std::collections::HashMap<&str, std::collections::HashSet<u32>> = Default::default();
+    for r in runs {
+        by_config.entry(r.row.config_id.as_str()).or_default().insert(r.row.process_id);
+    }
+    by_config.values().any(|ids| ids.len() >= stats::MIN_SAMPLES_FOR_INTERVAL)
+}
+
 fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     let runs = &rows.runs;
     let configs: BTreeSet<&str> = runs.iter().map(Run::config_id).collect();
@@ -136,7 +146,7 @@ fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {
          of the ratio of medians{}\n",
         stats::MIN_SAMPLES_FOR_INTERVAL,
         stats::RESAMPLES,
-        if runs.iter().map(|r| r.row.process_id).collect::<std::collections::HashSet<_>>().len() > 2 {
+        if timed_in_several_processes(runs) {
             format!(
                 "; where the rounds ran in {} or more pairs of processes (`processes`, `process_id`), that interval \
                  resamples processes, not rounds (a cluster bootstrap, {} resamples: rounds of one process share its \

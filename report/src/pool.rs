@@ -128,12 +128,8 @@ impl RoundRatios {
     /// the rounds' distribution-free interval ([`stats::median_ci`], which does not carry an offset of the one
     /// or few processes they ran in; docs/statistics.md, "Processes"). `key` seeds the bootstrap.
     pub fn estimate(&self, key: &str) -> Estimate {
-        let distinct: std::collections::HashSet<&u64> = self.processes.iter().collect();
-        if distinct.len() >= stats::MIN_SAMPLES_FOR_INTERVAL {
-            stats::clustered_ratio_ci(&self.ratios, &self.processes, stats::seed_for(key))
-        } else {
-            stats::median_ci(&self.ratios)
-        }
+        let over_processes = stats::clustered_ratio_ci(&self.ratios, &self.processes, stats::seed_for(key));
+        if over_processes.lo.is_nan() { stats::median_ci(&self.ratios) } else { over_processes }
     }
 }
 

@@ -397,20 +397,10 @@ fn a_killed_sweep_resumes_without_losing_or_duplicating_rows() {
 
     // Resuming rows timed on other pages is refused (`huge_pages` is not part of a point's key), and nothing is
     // written.
-    let text = std::fs::read_to_string(&runs).unwrap();
-    let pages = text.lines().next().unwrap().split(',').position(|h| h == "huge_pages").unwrap();
-    let lines: Vec<String> = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| {
-            let mut cells: Vec<&str> = l.split(',').collect();
-            if i > 0 {
-                cells[pages] = "always";
-            }
-            cells.join(",")
-        })
-        .collect();
-    let on_huge_pages = lines.join("\n") + "\n";
+    let mut rows = schema::row::read_rows(&std::fs::read_to_string(&runs).unwrap()).unwrap();
+    rows.iter_mut().for_each(|row| row.huge_pages = "always".into());
+    let on_huge_pages =
+        schema::row::header() + "\n" + &rows.iter().map(|row| schema::row::csv_line(row).unwrap()).collect::<String>();
     std::fs::write(&runs, &on_huge_pages).unwrap();
     let o =
         harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap(), "--resume"]).output().unwrap();
