@@ -6,6 +6,49 @@ use crate::spec::{ClaimKind, ClaimSpec, ReportSpec, Verdict};
 use crate::stats::{self, Estimate};
 use schema::column;
 
+/// What would settle an inconclusive point: more runs of each series, or, where its interval resamples the
+/// processes that timed it (`processes` in the config), more processes of each configuration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum More {
+    /// About this many more runs of each series.
+    Runs(usize),
+    /// About this many more worker processes of each configuration, each timing as many rounds as before.
+    Processes(usize),
+}
+
+impl More {
+    /// How many more.
+    pub fn count(self) -> usize {
+        match self {
+            More::Runs(n) | More::Processes(n) => n,
+        }
+    }
+
+    /// What is counted, in the plural (`runs`, `processes`).
+    pub fn unit(self) -> &'static str {
+        match self {
+            More::Runs(_) => "runs",
+            More::Processes(_) => "processes",
+        }
+    }
+
+    /// What would settle a point whose estimate rests on `provenance`: processes where the interval resampled
+    /// them (at least [`stats::MIN_SAMPLES_FOR_INTERVAL`]), else runs; `None` as [`runs_to_settle`].
+    pub fn to_settle(e: Estimate, kind: &ClaimKind, threshold: f64, provenance: &pool::Provenance) -> Option<More> {
+        if provenance.processes >= stats::MIN_SAMPLES_FOR_INTERVAL {
+            runs_to_settle(e, kind, threshold, provenance.processes).map(More::Processes)
+        } else {
+            runs_to_settle(e, kind, threshold, provenance.n).map(More::Runs)
+        }
+    }
+}
+
+impl std::fmt::Display for More {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "~{} more {}", self.count(), self.unit())
+    }
+}
+
 /// A checked claim.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ClaimResult {
@@ -42,8 +85,8 @@ pub struct PointResult {
     pub threshold: f64,
     /// Holds, fails or inconclusive at this point.
     pub verdict: Verdict,
-    /// Inconclusive points: about how many more runs of each series would settle it (see [`runs_to_settle`]).
-    pub more_runs: Option<usize>,
+    /// Inconclusive points: about how many more runs, or processes, would settle it (see [`runs_to_settle`]).
+    pub more: Option<More>,
     /// The most worker threads either side used there (1: a one-thread point).
     pub threads: f64,
 }
@@ -63,12 +106,12 @@ pub fn check(rows: &Rows, spec: &ReportSpec, claim: &ClaimSpec) -> ClaimResult {
         return no_points(claim, series, than);
     }
     let judged: Vec<Judged> = points.iter().map(|p| judge(&claim.kind, p)).collect();
-    let more_runs: Vec<Option<usize>> = points
+    let more: Vec<Option<More>> = points
         .iter()
         .zip(&judged)
         .map(|(p, j)| {
             (j.verdict == Verdict::Inconclusive)
-                .then(|| runs_to_settle(p.estimate, &claim.kind, j.threshold, p.provenance.n))
+                .then(|| More::to_settle(p.estimate, &claim.kind, j.threshold, &p.provenance))
                 .flatten()
         })
         .collect();
@@ -81,20 +124,20 @@ pub fn check(rows: &Rows, spec: &ReportSpec, claim: &ClaimSpec) -> ClaimResult {
         lo: estimate.lo,
         hi: estimate.hi,
         threshold: judged[worst].threshold,
-        detail: describe(&judged, &more_runs, &labels[worst]),
+        detail: describe(&judged, &more, &labels[worst]),
         points: points
             .iter()
             .zip(&judged)
             .zip(labels)
-            .zip(more_runs)
-            .map(|(((p, j), label), more_runs)| PointResult {
+            .zip(more)
+            .map(|(((p, j), label), more)| PointResult {
                 label,
                 ratio: p.estimate.value,
                 lo: p.estimate.lo,
                 hi: p.estimate.hi,
                 threshold: j.threshold,
                 verdict: j.verdict,
-                more_runs,
+                more,
                 threads: p.threads.max(p.reference_threads),
             })
             .collect(),
@@ -205,9 +248,10 @@ fn judge_within(e: Estimate, tolerance: f64) -> Judged {
     Judged { threshold: tolerance, safety: (-near, -far), verdict }
 }
 
-/// About how many more runs of each series would settle a point whose interval straddles a bound of its claim (the
-/// threshold, or `1 ± tolerance`), if its ratio and its runs' spread stay as they are: an interval narrows as
-/// 1/√runs, so it must shrink by the distance from the ratio to the bound. `None` when no bound is straddled or the
+/// About how many more of the `runs` independent draws behind a point's interval (runs of each series, or the
+/// processes its interval resampled) would settle a point whose interval straddles a bound of its claim (the
+/// threshold, or `1 ± tolerance`), if its ratio and its draws' spread stay as they are: an interval narrows as
+/// 1/√draws, so it must shrink by the distance from the ratio to the bound. `None` when no bound is straddled or the
 /// ratio sits on one (no number of runs settles that). A point without an interval (fewer runs than
 /// [`stats::MIN_SAMPLES_FOR_INTERVAL`]) needs at least the runs that give it one.
 pub fn runs_to_settle(e: Estimate, kind: &ClaimKind, threshold: f64, runs: usize) -> Option<usize> {
@@ -257,17 +301,27 @@ pub const SETTLE_LIMIT: usize = 1000;
 
 /// How many points were compared, how they came out, what would settle the inconclusive ones, and where the least
 /// favourable one is.
-fn describe(judged: &[Judged], more_runs: &[Option<usize>], worst_label: &str) -> String {
+fn describe(judged: &[Judged], more: &[Option<More>], worst_label: &str) -> String {
     let counts = |v: Verdict| judged.iter().filter(|j| j.verdict == v).count();
     let inconclusive = counts(Verdict::Inconclusive);
-    let near: Vec<usize> = more_runs.iter().flatten().copied().filter(|&n| n <= SETTLE_LIMIT).collect();
     let mut settle = String::new();
-    if let (Some(least), Some(most)) = (near.iter().min(), near.iter().max()) {
-        let runs = if least == most { format!("{least}") } else { format!("{least}–{most}") };
-        settle.push_str(&format!("; {} would settle with about {runs} more runs of each series", near.len()));
+    let mut settled = 0;
+    for (unit, of_each) in [("runs", "series"), ("processes", "configuration")] {
+        let near: Vec<usize> = more
+            .iter()
+            .flatten()
+            .filter(|m| m.unit() == unit)
+            .map(|m| m.count())
+            .filter(|&n| n <= SETTLE_LIMIT)
+            .collect();
+        if let (Some(least), Some(most)) = (near.iter().min(), near.iter().max()) {
+            let n = if least == most { format!("{least}") } else { format!("{least}–{most}") };
+            settle.push_str(&format!("; {} would settle with about {n} more {unit} of each {of_each}", near.len()));
+        }
+        settled += near.len();
     }
-    if inconclusive > near.len() {
-        settle.push_str(&format!("; {} sit on the threshold", inconclusive - near.len()));
+    if inconclusive > settled {
+        settle.push_str(&format!("; {} sit on the threshold", inconclusive - settled));
     }
     format!(
         "{} point{} ({} hold, {} fail, {inconclusive} inconclusive{settle}); least favourable at {}",
@@ -334,5 +388,18 @@ mod tests {
         assert_eq!(runs_to_settle(e(1.0, 0.97, 1.04), &within, 0.02, 10), Some(30));
         // Four runs have no interval: two more give one.
         assert_eq!(runs_to_settle(e(9.0, f64::NAN, f64::NAN), &faster, 1.0, 4), Some(2));
+    }
+
+    #[test]
+    fn a_point_whose_interval_resampled_processes_asks_for_more_processes() {
+        let within = ClaimKind::Within { series: "a".into(), than: "b".into(), tolerance: 0.02 };
+        let e = Estimate { value: 1.01, lo: 0.99, hi: 1.03 };
+        let provenance = |n, processes| pool::Provenance { n, processes, ..Default::default() };
+        // 40 rounds over 8 processes: the interval is the processes', so 4x the processes, not 4x the rounds.
+        assert_eq!(More::to_settle(e, &within, 0.02, &provenance(40, 8)), Some(More::Processes(24)));
+        // In one process (or rows without `process_id`), the rounds.
+        assert_eq!(More::to_settle(e, &within, 0.02, &provenance(40, 1)), Some(More::Runs(120)));
+        assert_eq!(More::to_settle(e, &within, 0.02, &provenance(40, 0)), Some(More::Runs(120)));
+        assert_eq!(More::Processes(24).to_string(), "~24 more processes");
     }
 }

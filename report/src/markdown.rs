@@ -397,11 +397,11 @@ fn claim_points(md: &mut String, spec: &ReportSpec, claims: &[ClaimResult]) {
         let _ = writeln!(md, "**{}**\n", claim.text.replace('\n', " "));
         md.push_str("| point | ratio [95% CI] | threshold | verdict |\n|---|---|---|---|\n");
         for p in &claim.points {
-            let verdict = match (p.verdict, p.more_runs) {
+            let verdict = match (p.verdict, p.more) {
                 (Verdict::Holds, _) => "holds".to_string(),
                 (Verdict::Fails, _) => "**fails**".to_string(),
-                (Verdict::Inconclusive, Some(n)) if n <= crate::claims::SETTLE_LIMIT => {
-                    format!("inconclusive (~{n} more runs)")
+                (Verdict::Inconclusive, Some(m)) if m.count() <= crate::claims::SETTLE_LIMIT => {
+                    format!("inconclusive ({m})")
                 }
                 (Verdict::Inconclusive, _) => "inconclusive (on the threshold)".to_string(),
             };

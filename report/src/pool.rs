@@ -32,6 +32,8 @@ pub struct Provenance {
     pub commits: Vec<String>,
     /// Distinct machines as `cpu_model (machine_id)`, in order of appearance.
     pub machines: Vec<String>,
+    /// Distinct worker processes that timed them (`process_id`; 0, rows recorded before the column, not counted).
+    pub processes: usize,
 }
 
 impl Provenance {
@@ -41,6 +43,12 @@ impl Provenance {
             n: group.len(),
             commits: crate::distinct(group.iter().map(|r| r.text(column::git_commit).to_string())),
             machines: crate::distinct(group.iter().map(|r| r.machine())),
+            processes: group
+                .iter()
+                .map(|r| r.row.process_id)
+                .filter(|&id| id != 0)
+                .collect::<std::collections::HashSet<_>>()
+                .len(),
         }
     }
 }

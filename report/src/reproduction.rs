@@ -679,7 +679,7 @@ mod tests {
     }
 
     fn point(label: &str, ratio: f64, lo: f64, hi: f64, verdict: Verdict) -> PointResult {
-        PointResult { label: label.into(), ratio, lo, hi, threshold: 1.0, verdict, more_runs: None, threads: 1.0 }
+        PointResult { label: label.into(), ratio, lo, hi, threshold: 1.0, verdict, more: None, threads: 1.0 }
     }
 
     fn claim(points: Vec<PointResult>) -> ClaimResult {

@@ -249,8 +249,8 @@ fn claims_table(claims: &[ClaimResult]) -> String {
             .points
             .iter()
             .map(|p| {
-                let settle = match (p.verdict, p.more_runs) {
-                    (Verdict::Inconclusive, Some(n)) if n <= claims::SETTLE_LIMIT => format!(" ~{n} more runs"),
+                let settle = match (p.verdict, p.more) {
+                    (Verdict::Inconclusive, Some(m)) if m.count() <= claims::SETTLE_LIMIT => format!(" {m}"),
                     (Verdict::Inconclusive, _) => " on the threshold".to_string(),
                     _ => String::new(),
                 };
