@@ -261,7 +261,7 @@ declare_columns! {
         /// `never`, or no glibc 2.35+); `-` in rows recorded before this column.
         huge_pages: String, Provenance = "-".to_string(), added 12;
         /// The operating system's id of the process that timed the run: the harness, or the worker it ran in
-        /// (every backend with `processes` above 1, which take turns between that many workers; Embree always).
+        /// (every backend with `processes` above 1, each worker timing one block of a configuration's runs; Embree always).
         /// Runs of one process share its offset (the layout its memory happened to get), so the intervals resample
         /// processes, not runs, where a series was timed in several. 0 for untimed runs and in earlier rows.
         process_id: u32, Provenance = 0, added 13;

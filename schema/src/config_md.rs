@@ -15,7 +15,7 @@ const TABLES: &str = "\
 | `warmups` | unrecorded runs of each configuration before its first repetition |
 | `order` | `interleaved` (default), `sequential` or `shuffled` (with `order_seed`) |
 | `sample_ms` | the shortest timed sample in ms, 0..=10000 (default 0: one pass): each timed run traces its job again until this long has passed and records the median pass (`trace_passes`); with `order = \"interleaved\"` the series of one point are built together and traced a pass of each in turn (`sample_configs`); a long sample that saw hypervisor steal time is taken again (`steal_s`) |
-| `processes` | processes each configuration is timed in, 1..=64 (default 1: this one, or one worker for backends with threads of their own): its timed runs take turns between that many worker processes of its own, started for it, so that what lasts a process's life (docs/statistics.md: an offset of up to ±4.5% between two series of one process) varies between its runs and the interval sees it |
+| `processes` | processes each configuration is timed in, 1..=64 (default 1: this one, or one worker for backends with threads of their own): its timed runs fall into that many blocks of consecutive runs, each timed in a worker process of its own started for it (and warmed by one untimed pass) and ended before the next, so that what lasts a process's life (docs/statistics.md: an offset of up to ±4.5% between two series of one process) varies between its runs and the interval, which resamples processes, sees it |
 | `[sweep]` | any setting below, a value or a list; the runs are the cartesian product |
 | `[[series]]` | `label` and the settings it fixes; each series runs the sweep's product |
 | `[[exclude]]` | settings (and/or `series`) whose every match is skipped |

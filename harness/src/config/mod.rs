@@ -119,8 +119,8 @@ pub struct Experiment {
     /// The shortest timed sample, in seconds (`sample_ms`): each timed run traces its job again until this much
     /// time has passed and records the mean per pass (0: one pass).
     pub sample_s: f64,
-    /// Processes each configuration is timed in (`processes`): its timed runs take turns between that many worker
-    /// processes of its own, so that what lasts a process's life varies between its runs (1: one process).
+    /// Processes each configuration is timed in (`processes`): its timed runs fall into that many blocks, each timed
+    /// in a worker process of its own, so that what lasts a process's life varies between its runs (1: one process).
     pub processes: u32,
     pub sweep: AxisValues,
     /// `sweep.sphere_file`, resolved against the config's folder.

@@ -29,10 +29,12 @@ pub(super) struct ConfigurationState<'a> {
     pub checked: Option<Checked>,
     /// True once it failed validation (recorded once, never timed).
     pub failed: bool,
-    /// Where it is timed, from its first timed run to its last: one runner, or the experiment's `processes`
-    /// workers, started as their turns come.
-    runners: Vec<Option<Runner>>,
-    /// Its timed runs so far in this sweep (which runner is next).
+    /// Where it is timed now: in this process or its worker, kept from its first timed run to its last; with
+    /// `processes` above 1, the worker of its current block of runs (see [`ConfigurationState::runner`]).
+    runner: Option<Runner>,
+    /// Which block of runs `runner` serves (with `processes` above 1).
+    block: usize,
+    /// Its timed runs so far in this sweep (which block is next).
     turns: usize,
     /// When it was last timed (the sweep's count of [`Sweep::time`] calls), to end the workers of the configuration
     /// idle longest when memory runs low.
@@ -57,7 +59,8 @@ impl<'a> Sweep<'a> {
                 configuration,
                 checked: None,
                 failed: false,
-                runners: Vec::new(),
+                runner: None,
+                block: 0,
                 turns: 0,
                 last_timed: 0,
                 pending: Pending::default(),
@@ -139,12 +142,13 @@ impl<'a> Sweep<'a> {
         for ((_, state), rays) in picked.iter_mut().zip(&rays) {
             let c = state.configuration;
             let processes = self.exp.processes;
-            let (runner, fresh) = state.runner(processes)?;
+            let (runner, fresh) = state.runner(processes, self.exp.warmups, self.exp.repetitions.max())?;
             turns.push(match runner {
                 Runner::Worker(worker) => {
                     let request = worker_request(plan, c);
                     if fresh && processes > 1 {
-                        worker.time(&request)?; // its own warm-up: every process's runs are warm
+                        // Its own warm-up, one untimed pass: every process's runs are warm.
+                        worker.time(&WorkerRequest { sample_s: 0.0, ..request.clone() })?;
                     }
                     worker.step::<()>(&request, Step::Prepare)?;
                     Turn::Worker { worker, request }
@@ -163,20 +167,20 @@ impl<'a> Sweep<'a> {
 }
 
 impl Sweep<'_> {
-    /// With `processes` above 1 every configuration keeps its workers from its first run to its last, and an
+    /// With `processes` above 1 every configuration keeps a worker from its first run to its last, and an
     /// interleaved sweep's configurations all live at once: while less than a quarter of the machine's memory is
-    /// available, the workers of the configuration idle longest (not one of `configs`) end; they start again, and
-    /// are warmed again, on its next turn.
+    /// available, the worker of the configuration idle longest (not one of `configs`) ends; another starts, and is
+    /// warmed, on its next turn.
     fn make_room(&mut self, configs: &[usize]) {
         if self.exp.processes <= 1 {
             return;
         }
         while memory_low() {
             let idle = (0..self.states.len())
-                .filter(|i| !configs.contains(i) && self.states[*i].runners.iter().any(Option::is_some))
+                .filter(|i| !configs.contains(i) && self.states[*i].runner.is_some())
                 .min_by_key(|&i| self.states[i].last_timed);
             let Some(i) = idle else { return };
-            self.states[i].runners.clear();
+            self.states[i].runner = None;
         }
     }
 }
@@ -220,27 +224,30 @@ impl Turn<'_> {
 
 impl ConfigurationState<'_> {
     /// Where its next run is timed, started on its first turn: in this process, or in a worker of its own (a
-    /// backend with threads of its own, as Embree; or every backend, in turn over `processes` workers).
-    /// Returns it, and whether it was started for this run.
-    fn runner(&mut self, processes: u32) -> Result<(&mut Runner, bool), Error> {
+    /// backend with threads of its own, as Embree; or every backend with `processes` above 1). With `processes` N
+    /// above 1 its `repetitions` (at most) fall into N blocks of consecutive runs (its `warmups` run in the first),
+    /// each timed in a worker started for it and ended when the next block begins: N processes, one alive at a
+    /// time. Returns it, and whether it was started for this run.
+    fn runner(&mut self, processes: u32, warmups: u32, repetitions: u32) -> Result<(&mut Runner, bool), Error> {
         let processes = processes.max(1) as usize;
-        let turn = self.turns % processes;
+        let per_block = (repetitions as usize).div_ceil(processes).max(1);
+        let block = self.turns.saturating_sub(warmups as usize) / per_block;
         self.turns += 1;
-        if self.runners.len() < processes {
-            self.runners.resize_with(processes, || None);
+        if processes > 1 && block != self.block {
+            self.runner = None; // the last block's worker ends
+            self.block = block;
         }
-        let fresh = self.runners[turn].is_none();
+        let fresh = self.runner.is_none();
         if fresh {
-            self.runners[turn] =
-                Some(if processes > 1 || backend::of(self.configuration.settings.accel).own_threads() {
-                    let exe = std::env::current_exe()
-                        .map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
-                    Runner::Worker(Worker::start(&exe, None)?)
-                } else {
-                    Runner::Here(Setup::start(&self.configuration.settings)?)
-                });
+            self.runner = Some(if processes > 1 || backend::of(self.configuration.settings.accel).own_threads() {
+                let exe = std::env::current_exe()
+                    .map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
+                Runner::Worker(Worker::start(&exe, None)?)
+            } else {
+                Runner::Here(Setup::start(&self.configuration.settings)?)
+            });
         }
-        Ok((self.runners[turn].as_mut().expect("started above"), fresh))
+        Ok((self.runner.as_mut().expect("started above"), fresh))
     }
 
     /// Marks it failed and lets its runs go.
@@ -251,7 +258,7 @@ impl ConfigurationState<'_> {
 
     /// Ends it: its worker process, pool and device go, and it expects no more runs.
     pub fn finish(&mut self) {
-        self.runners.clear();
+        self.runner = None;
         self.pending.warmups = 0;
         self.pending.repetitions = 0;
     }
