@@ -287,9 +287,76 @@ pub fn trace<A: Accelerator, C: Counters>(accel: &A, set: &RaySet, strategy: &St
     }
 }
 
+impl RaySet {
+    /// The first bytes of [`RaySet::to_bytes`].
+    const MAGIC: &'static [u8; 8] = b"BVHLRAYS";
+
+    /// The set as bytes: a tag, its kind, its length and each ray's eight `f32`s (origin, direction, `t_min`,
+    /// `t_max`), little-endian; [`RaySet::from_bytes`] reads them back bit for bit.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut bytes = Vec::with_capacity(17 + self.rays.len() * 32);
+        bytes.extend_from_slice(Self::MAGIC);
+        bytes.push(RayKind::ALL.iter().position(|&k| k == self.kind).expect("every kind is in ALL") as u8);
+        bytes.extend_from_slice(&(self.rays.len() as u64).to_le_bytes());
+        for r in &self.rays {
+            for v in [r.origin.x, r.origin.y, r.origin.z, r.dir.x, r.dir.y, r.dir.z, r.t_min, r.t_max] {
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        bytes
+    }
+
+    /// The set [`RaySet::to_bytes`] wrote; `None` for any other bytes.
+    pub fn from_bytes(bytes: &[u8]) -> Option<RaySet> {
+        let rest = bytes.strip_prefix(Self::MAGIC)?;
+        let (&kind, rest) = rest.split_first()?;
+        let kind = *RayKind::ALL.get(kind as usize)?;
+        let (len, rest) = rest.split_at_checked(8)?;
+        let len = usize::try_from(u64::from_le_bytes(len.try_into().ok()?)).ok()?;
+        if rest.len() != len.checked_mul(32)? {
+            return None;
+        }
+        let rays = rest
+            .chunks_exact(32)
+            .map(|ray| {
+                let f = |i: usize| f32::from_le_bytes(ray[4 * i..4 * i + 4].try_into().expect("four bytes"));
+                Ray { origin: Vec3::new(f(0), f(1), f(2)), dir: Vec3::new(f(3), f(4), f(5)), t_min: f(6), t_max: f(7) }
+            })
+            .collect();
+        Some(RaySet { kind, rays })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_ray_set_reads_back_from_its_bytes_bit_for_bit() {
+        let rays = vec![
+            Ray {
+                origin: Vec3::new(1.0, -2.5, 3e-7),
+                dir: Vec3::new(0.0, -0.0, 1.0),
+                t_min: 1e-4,
+                t_max: f32::INFINITY,
+            },
+            Ray { origin: Vec3::new(f32::MAX, 0.1, -7.0), dir: Vec3::new(0.6, 0.8, 0.0), t_min: 0.0, t_max: 2.5 },
+        ];
+        for kind in RayKind::ALL {
+            let set = RaySet { kind, rays: rays.clone() };
+            let back = RaySet::from_bytes(&set.to_bytes()).expect("reads back");
+            assert_eq!(back.kind, kind);
+            let bits = |s: &RaySet| s.to_bytes();
+            assert_eq!(bits(&back), bits(&set));
+            assert_eq!(back.rays[0].dir.y.to_bits(), (-0.0f32).to_bits());
+        }
+        let bytes = RaySet { kind: RayKind::Diffuse, rays }.to_bytes();
+        assert!(RaySet::from_bytes(&bytes[..bytes.len() - 1]).is_none(), "cut short");
+        assert!(RaySet::from_bytes(b"not rays").is_none());
+        let mut wrong_kind = bytes.clone();
+        wrong_kind[8] = 9;
+        assert!(RaySet::from_bytes(&wrong_kind).is_none());
+    }
 
     #[test]
     fn tile_order_covers_every_pixel_once_tile_by_tile() {

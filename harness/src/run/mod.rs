@@ -188,6 +188,7 @@ pub fn worker_request(plan: &Plan, c: &Configuration) -> WorkerRequest {
         settings: c.settings.clone(),
         sphere_file: plan.sphere_file.as_ref().map(|f| f.path.clone()),
         sample_s: plan.sample_s,
+        rays_file: None,
         step: worker::Step::Whole,
     }
 }

@@ -1,7 +1,10 @@
 //! The sweep's state: one [`ConfigurationState`] per configuration (its validation, where it is timed, the runs it
 //! still has) and the adaptive [`Sampler`] they share.
 
+use std::sync::Arc;
+
 use schema::Row;
+use tracer::rays::RaySet;
 
 use super::adaptive::{self, Sampler};
 use super::measure::{self, Context, Local, TakesPasses, Timing, Trial};
@@ -20,6 +23,47 @@ pub(super) struct Sweep<'a> {
     pub sampler: Sampler,
     /// Calls of [`Sweep::time`] so far.
     clock: u64,
+    /// The ray sets handed to workers.
+    ray_files: RayFiles,
+}
+
+/// The ray sets the sweep's workers read instead of making them again (each worker started for a block of runs would
+/// otherwise trace the scene's primary rays anew): written once each into a folder of the system's temporary
+/// directory, removed when the sweep ends.
+#[derive(Default)]
+struct RayFiles {
+    dir: Option<std::path::PathBuf>,
+    written: Vec<(Arc<RaySet>, std::path::PathBuf)>,
+}
+
+impl RayFiles {
+    /// The file that holds `rays`, written on first use.
+    fn path_of(&mut self, rays: &Arc<RaySet>) -> Result<std::path::PathBuf, Error> {
+        if let Some((_, path)) = self.written.iter().find(|(set, _)| Arc::ptr_eq(set, rays)) {
+            return Ok(path.clone());
+        }
+        let io = |p: &std::path::Path, e: std::io::Error| Error::Run(format!("{}: cannot write: {e}", p.display()));
+        let dir = match &self.dir {
+            Some(dir) => dir.clone(),
+            None => {
+                let dir = std::env::temp_dir().join(format!("bvhlab-rays-{}", std::process::id()));
+                std::fs::create_dir_all(&dir).map_err(|e| io(&dir, e))?;
+                self.dir.insert(dir).clone()
+            }
+        };
+        let path = dir.join(format!("{}.bin", self.written.len()));
+        std::fs::write(&path, rays.to_bytes()).map_err(|e| io(&path, e))?;
+        self.written.push((Arc::clone(rays), path.clone()));
+        Ok(path)
+    }
+}
+
+impl Drop for RayFiles {
+    fn drop(&mut self) {
+        if let Some(dir) = &self.dir {
+            let _ = std::fs::remove_dir_all(dir);
+        }
+    }
 }
 
 /// One configuration through the sweep.
@@ -73,7 +117,13 @@ impl<'a> Sweep<'a> {
         } else {
             vec![None; plan.configurations.len()]
         };
-        Sweep { exp, states, sampler: Sampler::new(exp.repetitions, reference), clock: 0 }
+        Sweep {
+            exp,
+            states,
+            sampler: Sampler::new(exp.repetitions, reference),
+            clock: 0,
+            ray_files: RayFiles::default(),
+        }
     }
 
     /// The metric whose interval decides `c`'s repetitions.
@@ -145,7 +195,11 @@ impl<'a> Sweep<'a> {
             let (runner, fresh) = state.runner(processes, self.exp.warmups, self.exp.repetitions.max())?;
             turns.push(match runner {
                 Runner::Worker(worker) => {
-                    let request = worker_request(plan, c);
+                    let rays_file = match rays {
+                        Some(rays) if processes > 1 => Some(self.ray_files.path_of(rays)?),
+                        _ => None,
+                    };
+                    let request = WorkerRequest { rays_file, ..worker_request(plan, c) };
                     if fresh && processes > 1 {
                         // Its own warm-up, one untimed pass: every process's runs are warm.
                         worker.time(&WorkerRequest { sample_s: 0.0, ..request.clone() })?;

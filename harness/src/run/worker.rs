@@ -31,6 +31,10 @@ pub struct WorkerRequest {
     /// The shortest timed sample in seconds (0, and absent in earlier revisions' requests: one pass).
     #[serde(default)]
     pub sample_s: f64,
+    /// The workload's ray set as the harness wrote it ([`RaySet::to_bytes`]; absent: the worker makes it, as
+    /// earlier revisions' workers do), so that a worker started for a few runs does not make it again.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rays_file: Option<PathBuf>,
     /// Which part of a timed run this request asks for (absent: all of it).
     #[serde(default, skip_serializing_if = "Step::is_whole")]
     pub step: Step,
@@ -91,15 +95,23 @@ impl Session {
             None => None,
         };
         let scene = file.as_ref().map(|f| &*f.scene);
-        let rays = match s.workload {
-            schema::Workload::Rays(k) => Some(super::validate::generate(k, &measure::make_scene(s, scene), s.seed)),
-            schema::Workload::Render => None,
+        let rays = match (s.workload, &request.rays_file) {
+            (schema::Workload::Rays(k), Some(path)) => Some(read_rays(path, k)?),
+            (schema::Workload::Rays(k), None) => {
+                Some(super::validate::generate(k, &measure::make_scene(s, scene), s.seed))
+            }
+            (schema::Workload::Render, _) => None,
         };
         Ok(Session { request: request.clone(), setup, file, rays, trial: None })
     }
 
-    /// Answers `step` of a run: the JSON of what it gives.
-    fn answer(&mut self, step: Step) -> Result<String, Error> {
+    /// True when `request` asks for this session's configuration (whatever its sample length).
+    fn serves(&self, request: &WorkerRequest) -> bool {
+        self.request == WorkerRequest { sample_s: self.request.sample_s, ..request.clone() }
+    }
+
+    /// Answers `step` of a run with samples of `sample_s`: the JSON of what it gives.
+    fn answer(&mut self, step: Step, sample_s: f64) -> Result<String, Error> {
         let cx = measure::Context {
             settings: &self.request.settings,
             file: self.file.as_ref().map(|f| &*f.scene),
@@ -109,7 +121,7 @@ impl Session {
         let out_of_order = || Error::Input("stdin: a pass or finish request before its prepare".into());
         Ok(match step {
             Step::Whole => {
-                let timing = measure::timed(cx.settings, cx.file, cx.rays, cx.setup, self.request.sample_s)?;
+                let timing = measure::timed(cx.settings, cx.file, cx.rays, cx.setup, sample_s)?;
                 serde_json::to_string(&timing).expect("timings serialize")
             }
             Step::Prepare => {
@@ -125,6 +137,19 @@ impl Session {
     }
 }
 
+/// The ray set of kind `kind` in the file `path` names.
+fn read_rays(path: &Path, kind: tracer::rays::RayKind) -> Result<RaySet, Error> {
+    let bytes =
+        std::fs::read(path).map_err(|e| Error::Run(format!("{}: cannot read the ray set: {e}", path.display())))?;
+    RaySet::from_bytes(&bytes).filter(|set| set.kind == kind).ok_or_else(|| {
+        Error::Run(format!(
+            "{}: not a ray set of kind {} (`rays_file` of the worker request)",
+            path.display(),
+            kind.name()
+        ))
+    })
+}
+
 /// The worker side: answers every request line of `input` with a timing line on `output`, until end of input.
 pub fn serve(input: impl BufRead, mut output: impl Write) -> Result<(), Error> {
     let mut session: Option<Session> = None;
@@ -136,11 +161,11 @@ pub fn serve(input: impl BufRead, mut output: impl Write) -> Result<(), Error> {
         let mut request: WorkerRequest =
             serde_json::from_str(&line).map_err(|e| Error::Input(format!("stdin: not a worker request: {e}")))?;
         let step = std::mem::take(&mut request.step);
-        if session.as_ref().is_none_or(|s| s.request != request) {
+        if session.as_ref().is_none_or(|s| !s.serves(&request)) {
             drop(session.take()); // the old configuration's pool and device go before the new ones start
             session = Some(Session::start(&request)?);
         }
-        let json = session.as_mut().expect("started above").answer(step)?;
+        let json = session.as_mut().expect("started above").answer(step, request.sample_s)?;
         writeln!(output, "{json}").and_then(|()| output.flush()).map_err(|e| Error::Run(format!("stdout: {e}")))?;
     }
     Ok(())
@@ -244,6 +269,7 @@ mod tests {
                 settings: s.clone(),
                 sphere_file: None,
                 sample_s: 0.0,
+                rays_file: None,
                 step: Step::Whole,
             }))
             .unwrap();
@@ -269,6 +295,7 @@ mod tests {
             settings: Settings::default().normalized(),
             sphere_file: Some("spheres.csv".into()),
             sample_s: 0.0,
+            rays_file: Some("rays.bin".into()),
             step: Step::Whole,
         };
         let json = serde_json::to_string(&request).unwrap();
@@ -294,15 +321,53 @@ mod tests {
                 workload: schema::Workload::Rays(tracer::rays::RayKind::Primary),
                 ..Settings::default()
             };
-            WorkerRequest { settings: s.normalized(), sphere_file: None, sample_s: 0.0, step: Step::Whole }
+            WorkerRequest {
+                settings: s.normalized(),
+                sphere_file: None,
+                sample_s: 0.0,
+                rays_file: None,
+                step: Step::Whole,
+            }
         };
         let (a, b) = (settings(50), settings(60));
-        let t = answers(&[&a, &a, &a, &b]);
+        let warm = WorkerRequest { sample_s: 0.0005, ..a.clone() };
+        let t = answers(&[&a, &warm, &a, &b]);
         assert_eq!(t.len(), 4);
         assert!(t[0].setup_s > 0.0);
-        assert!(t[..3].iter().all(|x| x.setup_s == t[0].setup_s && x.output_hash == t[0].output_hash), "{t:?}");
+        assert!(
+            t[..3].iter().all(|x| x.setup_s == t[0].setup_s && x.output_hash == t[0].output_hash),
+            "one session, whatever the sample's length: {t:?}"
+        );
         assert_ne!(t[3].output_hash, t[0].output_hash, "another configuration, another scene");
         assert_ne!(t[3].setup_s, t[0].setup_s, "another configuration starts its own setup");
+    }
+
+    #[test]
+    fn a_worker_given_the_ray_set_answers_as_one_that_makes_it() {
+        let s = Settings {
+            objects: 50,
+            width: 16,
+            height: 12,
+            workload: schema::Workload::Rays(tracer::rays::RayKind::Diffuse),
+            ..Settings::default()
+        }
+        .normalized();
+        let dir = std::env::temp_dir().join(format!("bvhlab-worker-rays-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (rays, wrong) = (dir.join("diffuse.bin"), dir.join("primary.bin"));
+        let made = |kind| super::super::validate::generate(kind, &measure::make_scene(&s, None), s.seed).to_bytes();
+        std::fs::write(&rays, made(tracer::rays::RayKind::Diffuse)).unwrap();
+        std::fs::write(&wrong, made(tracer::rays::RayKind::Primary)).unwrap();
+        let own =
+            WorkerRequest { settings: s.clone(), sphere_file: None, sample_s: 0.0, rays_file: None, step: Step::Whole };
+        let given = WorkerRequest { rays_file: Some(rays), ..own.clone() };
+        let t = answers(&[&own, &given]);
+        assert_eq!(t[0].output_hash, t[1].output_hash, "the same rays, the same answers");
+        for bad in [wrong, dir.join("missing.bin")] {
+            let line = serde_json::to_string(&WorkerRequest { rays_file: Some(bad), ..own.clone() }).unwrap() + "\n";
+            assert!(serve(line.as_bytes(), &mut Vec::new()).is_err(), "another kind's rays, or none, are refused");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
@@ -314,7 +379,13 @@ mod tests {
             workload: schema::Workload::Rays(tracer::rays::RayKind::Primary),
             ..Settings::default()
         };
-        let whole = WorkerRequest { settings: s.normalized(), sphere_file: None, sample_s: 0.0, step: Step::Whole };
+        let whole = WorkerRequest {
+            settings: s.normalized(),
+            sphere_file: None,
+            sample_s: 0.0,
+            rays_file: None,
+            step: Step::Whole,
+        };
         let step = |step| serde_json::to_string(&WorkerRequest { step, ..whole.clone() }).unwrap() + "\n";
         let finish = Step::Finish { passes: vec![0.003, 0.001, 0.002], steal_s: Some(0.0), sample_configs: 2 };
         let input = [step(Step::Whole), step(Step::Prepare), step(Step::Pass), step(Step::Pass), step(finish)].concat();
