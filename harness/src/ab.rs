@@ -1,7 +1,8 @@
 //! `harness ab`: the trustworthy comparison on a noisy machine. Builds another git revision, then times every
 //! configuration with both builds in one job, interleaved (A B, then B A, round after round), each run in a
 //! fresh `harness worker` process, and reports each configuration's time ratio new/old: the median of the per-round
-//! ratios with its distribution-free 95% interval ([`report::stats::paired_ratio_ci`]). Both builds must give the same answers, run after run. A configuration the base revision cannot run
+//! ratios with its 95% interval, by the statistic the reports and the CI gate use for rounds ([`RoundRatios::estimate`]:
+//! every round is a pair of processes of its own, so it resamples rounds as the processes they are). Both builds must give the same answers, run after run. A configuration the base revision cannot run
 //! (a setting newer than it, or a request its worker refuses) is skipped and listed.
 //!
 //! The base revision is built in a fresh git worktree under `target/ab/`, by cargo, into the target folder of
@@ -17,7 +18,8 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use report::stats::{Estimate, paired_ratio_ci};
+use report::RoundRatios;
+use report::stats::Estimate;
 
 use crate::config::Experiment;
 use crate::error::Error;
@@ -510,6 +512,16 @@ struct Pair {
     new_answers: Vec<u64>,
 }
 
+impl Pair {
+    /// The per-round ratios new/old, each round a pair of processes of its own.
+    fn ratios(&self) -> RoundRatios {
+        RoundRatios {
+            ratios: self.new.iter().zip(&self.old).map(|(n, o)| n / o).collect(),
+            processes: (0..self.new.len() as u64).collect(),
+        }
+    }
+}
+
 /// The verdict that counts: a regression of the first measurement stands only if the second one (when taken)
 /// finds it too; otherwise the configuration is unchanged.
 fn confirmed(first: Speed, second: Option<Speed>) -> Speed {
@@ -593,8 +605,8 @@ pub fn run(request: &AbRequest<'_>) -> Result<(), Error> {
     }
     let mut pairs = measure(&plan, &all, rounds, bins, &root, "")?;
     let speed = |c: &Configuration, pair: &Pair| {
-        // Old and new ran in the same rounds (one after the other): the median of the per-round ratios.
-        let e: Estimate = paired_ratio_ci(&pair.new, &pair.old);
+        // Old and new ran in the same rounds (one after the other), each round in a pair of processes of its own.
+        let e: Estimate = pair.ratios().estimate(&c.id);
         (Speed::of(&e, request.min_effect, c.settings.strategy().threads == 1), e)
     };
     let flagged: Vec<usize> =

@@ -30,6 +30,7 @@ use polars_io::prelude::{CsvWriter, ParquetWriter, SerWriter};
 
 pub use claims::ClaimResult;
 pub use error::Error;
+pub use pool::RoundRatios;
 use spec::ReportSpec;
 
 /// The distinct values of `values`, in order of appearance.
