@@ -288,10 +288,20 @@ fn overall(judged: &[Judged]) -> Verdict {
 
 /// Index of the least safe point (the first of equals); `judged` must not be empty.
 fn least_favourable(judged: &[Judged]) -> usize {
+    // A failing point before an inconclusive one before one that holds: the point named is the one that decided
+    // the claim's verdict. Among equals, the least safe.
+    let rank = |v: Verdict| match v {
+        Verdict::Fails => 0,
+        Verdict::Inconclusive => 1,
+        Verdict::Holds => 2,
+    };
     (0..judged.len())
         .min_by(|&a, &b| {
             let (ka, kb) = (judged[a].safety, judged[b].safety);
-            ka.0.total_cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
+            rank(judged[a].verdict)
+                .cmp(&rank(judged[b].verdict))
+                .then(ka.0.total_cmp(&kb.0))
+                .then(ka.1.total_cmp(&kb.1))
         })
         .expect("points is not empty")
 }
@@ -388,6 +398,24 @@ mod tests {
         assert_eq!(runs_to_settle(e(1.0, 0.97, 1.04), &within, 0.02, 10), Some(30));
         // Four runs have no interval: two more give one.
         assert_eq!(runs_to_settle(e(9.0, f64::NAN, f64::NAN), &faster, 1.0, 4), Some(2));
+    }
+
+    #[test]
+    fn the_least_favourable_point_is_the_one_that_decided_the_verdict() {
+        // Within 10%: one point sits just off 1 with a tight interval (holds), another straddles 1.1 (inconclusive):
+        // the claim is inconclusive, and the point it names is the inconclusive one, not the one off 1.
+        let judged: Vec<Judged> = [(1.003, 1.016), (0.95, 1.17), (0.97, 1.02)]
+            .iter()
+            .map(|&(lo, hi)| judge_within(Estimate { value: (lo + hi) / 2.0, lo, hi }, 0.1))
+            .collect();
+        assert_eq!(overall(&judged), Verdict::Inconclusive);
+        assert_eq!(least_favourable(&judged), 1);
+        // Faster than 1: a failing point is named before an inconclusive one whose interval reaches lower.
+        let judged: Vec<Judged> = [(0.5, 1.5), (0.9, 0.95), (1.1, 1.2)]
+            .iter()
+            .map(|&(lo, hi)| judge_faster(Estimate { value: (lo + hi) / 2.0, lo, hi }, 1.0))
+            .collect();
+        assert_eq!(least_favourable(&judged), 1);
     }
 
     #[test]
