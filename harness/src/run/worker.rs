@@ -303,6 +303,18 @@ mod tests {
         assert_eq!(serde_json::from_str::<WorkerRequest>(&json).unwrap(), request);
     }
 
+    /// Settings of a small sphere scene traced with ray set `kind`.
+    fn small(kind: tracer::rays::RayKind) -> Settings {
+        let s = Settings {
+            objects: 50,
+            width: 16,
+            height: 12,
+            workload: schema::Workload::Rays(kind),
+            ..Settings::default()
+        };
+        s.normalized()
+    }
+
     /// The JSON lines a worker answers to `requests`.
     fn answers(requests: &[&WorkerRequest]) -> Vec<Timing> {
         let input: String = requests.iter().map(|r| serde_json::to_string(r).unwrap() + "\n").collect();
@@ -344,14 +356,7 @@ mod tests {
 
     #[test]
     fn a_worker_given_the_ray_set_answers_as_one_that_makes_it() {
-        let s = Settings {
-            objects: 50,
-            width: 16,
-            height: 12,
-            workload: schema::Workload::Rays(tracer::rays::RayKind::Diffuse),
-            ..Settings::default()
-        }
-        .normalized();
+        let s = small(tracer::rays::RayKind::Diffuse);
         let dir = std::env::temp_dir().join(format!("bvhlab-worker-rays-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let (rays, wrong) = (dir.join("diffuse.bin"), dir.join("primary.bin"));
@@ -372,20 +377,8 @@ mod tests {
 
     #[test]
     fn a_run_taken_in_steps_answers_as_a_whole_run_does() {
-        let s = Settings {
-            objects: 50,
-            width: 16,
-            height: 12,
-            workload: schema::Workload::Rays(tracer::rays::RayKind::Primary),
-            ..Settings::default()
-        };
-        let whole = WorkerRequest {
-            settings: s.normalized(),
-            sphere_file: None,
-            sample_s: 0.0,
-            rays_file: None,
-            step: Step::Whole,
-        };
+        let s = small(tracer::rays::RayKind::Primary);
+        let whole = WorkerRequest { settings: s, sphere_file: None, sample_s: 0.0, rays_file: None, step: Step::Whole };
         let step = |step| serde_json::to_string(&WorkerRequest { step, ..whole.clone() }).unwrap() + "\n";
         let finish = Step::Finish { passes: vec![0.003, 0.001, 0.002], steal_s: Some(0.0), sample_configs: 2 };
         let input = [step(Step::Whole), step(Step::Prepare), step(Step::Pass), step(Step::Pass), step(finish)].concat();
