@@ -87,11 +87,11 @@ fn distinct(runs: &[Run], column: &str) -> String {
 /// Whether some configuration's runs took turns between enough processes (`processes`) that its ratios' intervals
 /// resample processes ([`crate::pool::RoundRatios::estimate`]).
 fn timed_in_several_processes(runs: &[Run]) -> bool {
-    let mut by_config: std::collections::HashMap<&str, std::collections::HashSet<u32>> = Default::default();
+    let mut by_config: std::collections::HashMap<&str, Vec<&Run>> = Default::default();
     for r in runs {
-        by_config.entry(r.row.config_id.as_str()).or_default().insert(r.row.process_id);
+        by_config.entry(r.row.config_id.as_str()).or_default().push(r);
     }
-    by_config.values().any(|ids| ids.len() >= stats::MIN_SAMPLES_FOR_INTERVAL)
+    by_config.values().any(|group| crate::pool::processes(group.iter().copied()) >= stats::MIN_SAMPLES_FOR_INTERVAL)
 }
 
 fn what_ran(md: &mut String, rows: &Rows, spec: &ReportSpec) {

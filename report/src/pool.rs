@@ -43,14 +43,14 @@ impl Provenance {
             n: group.len(),
             commits: crate::distinct(group.iter().map(|r| r.text(column::git_commit).to_string())),
             machines: crate::distinct(group.iter().map(|r| r.machine())),
-            processes: group
-                .iter()
-                .map(|r| r.row.process_id)
-                .filter(|&id| id != 0)
-                .collect::<std::collections::HashSet<_>>()
-                .len(),
+            processes: processes(group.iter().copied()),
         }
     }
+}
+
+/// How many distinct worker processes timed `runs` (`process_id`; 0, rows recorded before the column, not counted).
+pub fn processes<'a>(runs: impl IntoIterator<Item = &'a Run>) -> usize {
+    runs.into_iter().map(|r| r.row.process_id).filter(|&id| id != 0).collect::<std::collections::HashSet<_>>().len()
 }
 
 /// Whether `other` is `run`'s counterpart: equal on every setting column and the machine, except the

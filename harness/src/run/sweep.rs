@@ -46,7 +46,10 @@ impl RayFiles {
         let dir = match &self.dir {
             Some(dir) => dir.clone(),
             None => {
-                let dir = std::env::temp_dir().join(format!("bvhlab-rays-{}", std::process::id()));
+                // One folder per sweep, even where one process runs several at once.
+                static SWEEPS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+                let sweep = SWEEPS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let dir = std::env::temp_dir().join(format!("bvhlab-rays-{}-{sweep}", std::process::id()));
                 std::fs::create_dir_all(&dir).map_err(|e| io(&dir, e))?;
                 self.dir.insert(dir).clone()
             }
