@@ -2,7 +2,7 @@
 //!
 //! - `serial`: rows in order on the calling thread.
 //! - `rayon-bands` (the paper's main method): the image cut into [`RAYON_BANDS_PER_THREAD`] × threads
-//!   horizontal bands, work-stolen by the rayon pool the call runs in when that pool has exactly `threads`
+//!   horizontal bands of equal height to within one row ([`band_rows`]), work-stolen by the rayon pool the call runs in when that pool has exactly `threads`
 //!   threads (a caller that times runs starts it once, outside its timers), else by a pool built for this
 //!   call (never the global pool).
 //! - `mpsc-threads` (the paper's second method): one scoped std thread per band, one band per thread
@@ -21,6 +21,17 @@ use crate::counters::Counters;
 
 /// Bands per thread for `rayon-bands`: more bands than threads lets stealing even out uneven rows.
 pub const RAYON_BANDS_PER_THREAD: usize = 4;
+
+/// The rows `[start, end)` of band `band` when `height` rows are cut into `bands` bands: the same share of the image
+/// for every height, each band's height within one row of the others (`bands` at least 1).
+///
+/// So an image sampled a few percent more densely adds its rows to every band alike, and the threads' loads keep
+/// their balance. Cutting into bands of `height.div_ceil(bands)` rows instead left the shortfall in the last band and
+/// moved every boundary: 388 rows in 8 bands gave 49-row bands and a 45-row last one.
+pub fn band_rows(band: usize, bands: usize, height: usize) -> std::ops::Range<usize> {
+    let bands = bands.max(1);
+    band * height / bands..(band + 1) * height / bands
+}
 
 /// How rows are spread over threads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -113,15 +124,20 @@ impl Strategy {
             StrategyKind::Serial => band(0, out),
             StrategyKind::RayonBands => {
                 let bands = (threads * RAYON_BANDS_PER_THREAD).clamp(1, height.max(1));
-                let rows_per_band = height.div_ceil(bands).max(1);
                 let mut bands = || {
-                    out.par_chunks_mut(rows_per_band * width)
-                        .enumerate()
-                        .map(|(b, rows)| band(b * rows_per_band, rows))
-                        .reduce(C::default, |mut a, b| {
-                            a.merge(b);
-                            a
-                        })
+                    // One entry per band, each a disjoint run of rows (allocated once per call, not per row).
+                    let mut rest = &mut out[..];
+                    let mut slices = Vec::with_capacity(bands);
+                    for b in 0..bands {
+                        let rows = band_rows(b, bands, height);
+                        let (these, after) = std::mem::take(&mut rest).split_at_mut(rows.len() * width);
+                        slices.push((rows.start, these));
+                        rest = after;
+                    }
+                    slices.into_par_iter().map(|(first_row, rows)| band(first_row, rows)).reduce(C::default, |mut a, b| {
+                        a.merge(b);
+                        a
+                    })
                 };
                 if rayon::current_thread_index().is_some() && rayon::current_num_threads() == threads {
                     bands()
@@ -134,13 +150,14 @@ impl Strategy {
                 }
             }
             StrategyKind::MpscThreads => {
-                let rows_per_band = height.div_ceil(threads).max(1);
+                let bands = threads.clamp(1, height.max(1));
                 let (sender, receiver) = mpsc::channel::<(usize, Vec<T>, C)>();
                 let band = &band;
                 std::thread::scope(|scope| {
-                    for first_row in (0..height).step_by(rows_per_band) {
+                    for b in 0..bands {
                         let sender = sender.clone();
-                        let rows = rows_per_band.min(height - first_row);
+                        let rows = band_rows(b, bands, height);
+                        let (first_row, rows) = (rows.start, rows.len());
                         scope.spawn(move || {
                             let mut buffer = vec![T::default(); rows * width];
                             let counters = band(first_row, &mut buffer);
@@ -185,5 +202,42 @@ mod tests {
         let other_size = pool(3).install(|| row_threads(strategy));
         assert!(other_size.iter().all(|n| !n.starts_with("setup-")), "{other_size:?}");
         assert!(row_threads(strategy).iter().all(|n| !n.starts_with("setup-")));
+    }
+
+    #[test]
+    fn bands_cover_every_row_once_and_differ_by_at_most_one_row() {
+        for height in 0..200 {
+            for bands in 1..=70 {
+                let all: Vec<_> = (0..bands).map(|b| band_rows(b, bands, height)).collect();
+                assert_eq!(all[0].start, 0);
+                assert_eq!(all[bands - 1].end, height);
+                assert!(all.windows(2).all(|w| w[0].end == w[1].start), "{height} rows, {bands} bands: {all:?}");
+                let (low, high) = (height / bands, height.div_ceil(bands));
+                assert!(all.iter().all(|r| (low..=high).contains(&r.len())), "{height} rows, {bands} bands: {all:?}");
+            }
+        }
+        // 2% more rows add a row to some bands and move no boundary by more than one row.
+        for b in 0..8 {
+            assert!(band_rows(b, 8, 388).start.abs_diff(band_rows(b, 8, 384).start * 388 / 384) <= 1);
+        }
+    }
+
+    #[test]
+    fn every_strategy_fills_every_row_once_at_any_height() {
+        for kind in StrategyKind::ALL {
+            for threads in [1, 2, 3, 7] {
+                for height in [0, 1, 5, 13, 64] {
+                    let mut out = vec![0; 3 * height];
+                    let calls: Vec<_> = (0..height).map(|_| std::sync::atomic::AtomicUsize::new(0)).collect();
+                    let _: NoCounters = Strategy::new(kind, threads).run_rows(3, &mut out, |y, items, _| {
+                        calls[y].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        items.fill(y + 1);
+                    });
+                    assert!(calls.iter().all(|c| c.load(std::sync::atomic::Ordering::Relaxed) == 1));
+                    let want: Vec<_> = (0..height).flat_map(|y| [y + 1; 3]).collect();
+                    assert_eq!(out, want, "{kind:?}×{threads}, {height} rows");
+                }
+            }
+        }
     }
 }
