@@ -134,10 +134,13 @@ impl Strategy {
                         slices.push((rows.start, these));
                         rest = after;
                     }
-                    slices.into_par_iter().map(|(first_row, rows)| band(first_row, rows)).reduce(C::default, |mut a, b| {
-                        a.merge(b);
-                        a
-                    })
+                    slices.into_par_iter().map(|(first_row, rows)| band(first_row, rows)).reduce(
+                        C::default,
+                        |mut a, b| {
+                            a.merge(b);
+                            a
+                        },
+                    )
                 };
                 if rayon::current_thread_index().is_some() && rayon::current_num_threads() == threads {
                     bands()

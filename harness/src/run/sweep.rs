@@ -191,29 +191,49 @@ impl<'a> Sweep<'a> {
         let mut picked: Vec<(usize, &mut ConfigurationState<'a>)> =
             self.states.iter_mut().enumerate().filter(|(i, _)| configs.contains(i)).collect();
         picked.sort_by_key(|(i, _)| configs.iter().position(|c| c == i));
-        let mut turns = Vec::new();
+        // Start the runners. A fresh worker's untimed warm-up (a build and a pass) begins at once and is awaited
+        // only once every runner has started, so a round's new workers start side by side; their timed builds
+        // then run one after the other, with no warm-up beside them.
+        let processes = self.exp.processes;
+        let mut requests = Vec::with_capacity(picked.len());
         for ((_, state), rays) in picked.iter_mut().zip(&rays) {
             let c = state.configuration;
-            let processes = self.exp.processes;
             let (runner, fresh) = state.runner(processes, self.exp.warmups, self.exp.repetitions.max())?;
-            turns.push(match runner {
+            requests.push(match runner {
                 Runner::Worker(worker) => {
                     let rays_file = match rays {
                         Some(rays) if processes > 1 => Some(self.ray_files.path_of(rays)?),
                         _ => None,
                     };
                     let request = WorkerRequest { rays_file, ..worker_request(plan, c) };
-                    if fresh && processes > 1 {
+                    let warming = fresh && processes > 1;
+                    if warming {
                         // Its own warm-up, one untimed pass: every process's runs are warm.
-                        worker.time(&WorkerRequest { sample_s: 0.0, ..request.clone() })?;
+                        worker.begin(&WorkerRequest { sample_s: 0.0, ..request.clone() });
                     }
+                    Some((request, warming))
+                }
+                Runner::Here(_) => None,
+            });
+        }
+        for ((_, state), request) in picked.iter_mut().zip(&requests) {
+            if let (Some(Runner::Worker(worker)), Some((_, true))) = (state.runner.as_mut(), request) {
+                worker.end()?; // the warm-up's timing is not recorded
+            }
+        }
+        let mut turns = Vec::new();
+        for (((_, state), rays), request) in picked.iter_mut().zip(&rays).zip(requests) {
+            let c = state.configuration;
+            turns.push(match (state.runner.as_mut().expect("started above"), request) {
+                (Runner::Worker(worker), Some((request, _))) => {
                     worker.step::<()>(&request, Step::Prepare)?;
                     Turn::Worker { worker, request }
                 }
-                Runner::Here(setup) => {
+                (Runner::Here(setup), _) => {
                     let cx = Context { settings: &c.settings, file: plan.scene_file(), rays: rays.as_deref(), setup };
                     Turn::Here(Local { trial: Trial::prepare(&cx)?, cx })
                 }
+                (Runner::Worker(_), None) => unreachable!("a worker's request is made when it is picked"),
             });
         }
         let mut takers: Vec<&mut dyn TakesPasses> = turns.iter_mut().map(|t| t as &mut dyn TakesPasses).collect();

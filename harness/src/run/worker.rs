@@ -200,6 +200,17 @@ impl Worker {
         self.receive()
     }
 
+    /// Sends `request` without waiting for its timing ([`Worker::end`] takes it), so that several workers work at
+    /// once.
+    pub fn begin(&mut self, request: &WorkerRequest) {
+        self.send(request);
+    }
+
+    /// The timing of the request [`Worker::begin`] sent.
+    pub fn end(&mut self) -> Result<Timing, Error> {
+        self.receive()
+    }
+
     /// Asks for `step` of a run of `request` (a run whose passes take turns with others'): its answer.
     pub fn step<T: serde::de::DeserializeOwned>(&mut self, request: &WorkerRequest, step: Step) -> Result<T, Error> {
         self.send(&WorkerRequest { step, ..request.clone() });
