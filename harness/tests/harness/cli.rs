@@ -452,6 +452,28 @@ fn with_processes_each_configuration_is_timed_in_blocks_by_workers_of_its_own() 
     assert_eq!(all.len(), 6, "no process shared between configurations");
 }
 
+/// The series of a point sampled together (`sample_ms`, interleaved) with `processes`: each round starts a fresh worker
+/// per series (their warm-ups side by side), and every timed row comes from a process of its own that took turns.
+#[test]
+fn with_processes_the_series_of_a_round_start_their_workers_together() {
+    let dir = temp("processes-series");
+    let cfg = dir.join("series.toml");
+    std::fs::write(
+        &cfg,
+        "name = \"series\"\nrepetitions = 3\nprocesses = 3\nsample_ms = 5\n[sweep]\nobjects = 10\nwidth = 32\nheight = 16\n\
+         [[series]]\nlabel = \"a\"\n[[series]]\nlabel = \"b\"\naccel = \"bvh\"\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let runs = out.join("runs.csv");
+    let (ids, takers) = (column(&runs, "process_id"), column(&runs, "sample_configs"));
+    assert_eq!(ids.len(), 6);
+    assert!(takers.iter().all(|n| n == "2"), "both series take turns in every round: {takers:?}");
+    assert_eq!(ids.iter().collect::<HashSet<_>>().len(), 6, "one process per series and round: {ids:?}");
+}
+
 /// Runs into a folder that holds rows never lose them: each earlier run moves into `previous/` (older ones into
 /// `previous-1`, …), `check` compares against it out of the box, `--force` replaces, `--resume --force` is refused.
 #[test]
