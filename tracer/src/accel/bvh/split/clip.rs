@@ -21,31 +21,73 @@ struct Polygon {
 }
 
 impl Polygon {
+    const EMPTY: Polygon = Polygon { vertices: [DVec3::ZERO; MAX_VERTICES], len: 0 };
+
     fn triangle(t: &Triangle) -> Self {
-        let mut vertices = [DVec3::ZERO; MAX_VERTICES];
-        for (v, p) in vertices.iter_mut().zip(t.p) {
+        let mut poly = Polygon::EMPTY;
+        for (v, p) in poly.vertices.iter_mut().zip(t.p) {
             *v = p.as_dvec3();
         }
-        Polygon { vertices, len: 3 }
+        poly.len = 3;
+        poly
     }
 
-    /// The part on the side of `axis = pos` where `coordinate <= pos` (`below`) or `>= pos`.
-    fn clip(&self, axis: usize, pos: f64, below: bool) -> Polygon {
-        let mut out = Polygon { vertices: [DVec3::ZERO; MAX_VERTICES], len: 0 };
-        let inside = |v: DVec3| if below { v[axis] <= pos } else { v[axis] >= pos };
+    fn vertices(&self) -> &[DVec3] {
+        &self.vertices[..self.len]
+    }
+
+    /// The part inside `within` (Sutherland–Hodgman against its six planes). A plane that no vertex lies beyond
+    /// leaves the polygon as it is (the clip would copy every vertex in order), so it is skipped.
+    fn clip_to_box(&mut self, within: &Box3A) {
+        let mut out = Polygon::EMPTY;
+        for a in 0..3 {
+            for (pos, below) in [(within.min[a] as f64, false), (within.max[a] as f64, true)] {
+                let beyond = |v: &DVec3| if below { v[a] > pos } else { v[a] < pos };
+                if self.vertices().iter().any(beyond) {
+                    let [lo, hi] = if below { [Some(&mut out), None] } else { [None, Some(&mut out)] };
+                    self.split_into(a, pos, lo, hi);
+                    std::mem::swap(self, &mut out);
+                }
+            }
+        }
+    }
+
+    /// The parts on the side of `axis = pos` where `coordinate <= pos` (into `below`) and where `>= pos` (into
+    /// `above`), in one pass over the edges; either may be left out.
+    fn split_into(&self, axis: usize, pos: f64, mut below: Option<&mut Polygon>, mut above: Option<&mut Polygon>) {
+        if let Some(p) = below.as_deref_mut() {
+            p.len = 0;
+        }
+        if let Some(p) = above.as_deref_mut() {
+            p.len = 0;
+        }
         for i in 0..self.len {
             let (a, b) = (self.vertices[i], self.vertices[(i + 1) % self.len]);
-            if inside(a) {
-                out.push(a);
-            }
-            if inside(a) != inside(b) {
+            let crossing = || {
                 let t = (pos - a[axis]) / (b[axis] - a[axis]);
                 let mut p = a + (b - a) * t;
                 p[axis] = pos;
-                out.push(p);
+                p
+            };
+            if let Some(out) = below.as_deref_mut() {
+                let (ia, ib) = (a[axis] <= pos, b[axis] <= pos);
+                if ia {
+                    out.push(a);
+                }
+                if ia != ib {
+                    out.push(crossing());
+                }
+            }
+            if let Some(out) = above.as_deref_mut() {
+                let (ia, ib) = (a[axis] >= pos, b[axis] >= pos);
+                if ia {
+                    out.push(a);
+                }
+                if ia != ib {
+                    out.push(crossing());
+                }
             }
         }
-        out
     }
 
     fn push(&mut self, v: DVec3) {
@@ -81,13 +123,13 @@ pub fn box_halves(within: &Box3A, axis: usize, pos: f32) -> [Box3A; 2] {
 /// The boxes of the parts of `t` inside `within` below and above the plane `axis = pos` (empty where none).
 pub fn triangle_halves(t: &Triangle, within: &Box3A, axis: usize, pos: f32) -> [Box3A; 2] {
     let mut poly = Polygon::triangle(t);
-    for a in 0..3 {
-        poly = poly.clip(a, within.min[a] as f64, false).clip(a, within.max[a] as f64, true);
-    }
+    poly.clip_to_box(within);
+    let (mut below, mut above) = (Polygon::EMPTY, Polygon::EMPTY);
+    poly.split_into(axis, pos as f64, Some(&mut below), Some(&mut above));
     let halves = box_halves(within, axis, pos);
-    [true, false].map(|below| {
-        let side = &halves[!below as usize];
-        let b = poly.clip(axis, pos as f64, below).bounds();
+    let parts = [below, above];
+    [0, 1].map(|k| {
+        let (b, side) = (parts[k].bounds(), &halves[k]);
         Box3A { min: b.min.max(side.min), max: b.max.min(side.max) }
     })
 }
@@ -118,19 +160,19 @@ pub fn triangle_slab_parts(
     mut part: impl FnMut(usize, Box3A),
 ) {
     let mut poly = Polygon::triangle(t);
-    for a in 0..3 {
-        poly = poly.clip(a, within.min[a] as f64, false).clip(a, within.max[a] as f64, true);
-    }
+    poly.clip_to_box(within);
+    let (mut below, mut above) = (Polygon::EMPTY, Polygon::EMPTY);
     let mut slab = *within;
     for (i, &pos) in planes.iter().enumerate() {
-        let [below, above] = box_halves(&slab, axis, pos);
-        let b = poly.clip(axis, pos as f64, true).bounds();
-        let b = Box3A { min: b.min.max(below.min), max: b.max.min(below.max) };
+        let [below_box, above_box] = box_halves(&slab, axis, pos);
+        poly.split_into(axis, pos as f64, Some(&mut below), Some(&mut above));
+        let b = below.bounds();
+        let b = Box3A { min: b.min.max(below_box.min), max: b.max.min(below_box.max) };
         if !is_empty(&b) {
             part(i, b);
         }
-        poly = poly.clip(axis, pos as f64, false);
-        slab = above;
+        std::mem::swap(&mut poly, &mut above);
+        slab = above_box;
         if poly.len == 0 {
             return;
         }
