@@ -109,6 +109,12 @@ impl Polygon {
             max: Vec3A::from_array(hi.as_vec3a().to_array().map(f32::next_up)),
         }
     }
+
+    /// [`bounds`](Self::bounds) cut to `within` (empty where they do not meet).
+    fn bounds_in(&self, within: &Box3A) -> Box3A {
+        let b = self.bounds();
+        Box3A { min: b.min.max(within.min), max: b.max.min(within.max) }
+    }
 }
 
 /// `within` cut to the half-space `coordinate <= pos` (`[0]`) and `>= pos` (`[1]`); either may be empty.
@@ -128,10 +134,7 @@ pub fn triangle_halves(t: &Triangle, within: &Box3A, axis: usize, pos: f32) -> [
     poly.split_into(axis, pos as f64, Some(&mut below), Some(&mut above));
     let halves = box_halves(within, axis, pos);
     let parts = [below, above];
-    [0, 1].map(|k| {
-        let (b, side) = (parts[k].bounds(), &halves[k]);
-        Box3A { min: b.min.max(side.min), max: b.max.min(side.max) }
-    })
+    [0, 1].map(|k| parts[k].bounds_in(&halves[k]))
 }
 
 /// [`Referenced::slab_parts`](super::Referenced::slab_parts) of a box: `within` cut to each slab it reaches.
@@ -166,8 +169,7 @@ pub fn triangle_slab_parts(
     for (i, &pos) in planes.iter().enumerate() {
         let [below_box, above_box] = box_halves(&slab, axis, pos);
         poly.split_into(axis, pos as f64, Some(&mut below), Some(&mut above));
-        let b = below.bounds();
-        let b = Box3A { min: b.min.max(below_box.min), max: b.max.min(below_box.max) };
+        let b = below.bounds_in(&below_box);
         if !is_empty(&b) {
             part(i, b);
         }
@@ -177,8 +179,7 @@ pub fn triangle_slab_parts(
             return;
         }
     }
-    let b = poly.bounds();
-    let b = Box3A { min: b.min.max(slab.min), max: b.max.min(slab.max) };
+    let b = poly.bounds_in(&slab);
     if !is_empty(&b) {
         part(planes.len(), b);
     }
