@@ -1,8 +1,11 @@
 //! Collapsing the binary tree into `W`-wide nodes (tinybvh's `BVH8_CPU::ConvertFrom`, Embree's wide builders).
 //!
-//! Starting from a binary node, its children are gathered and the gathered child with the largest surface area
-//! is repeatedly replaced by its own two children, until there are `W` of them or none can be opened. A binary
-//! node can be opened when it is interior and holds more than `B` spheres: a subtree of at most `B` spheres
+//! A wide node's children are a cut of its binary node's subtree: at most `W` descendants that together hold all
+//! its spheres. The cut is chosen bottom-up for the least SAH cost (Ylitie, Karras and Laine 2017's collapse, with
+//! the leaves fixed as below): every wide node costs its box's surface area, and leaves cost the same whatever the
+//! cut, so for each binary node and each number of children k ≤ `W` the cheapest way to cover its subtree with k
+//! children is either the node itself (a leaf, or a wide node of its own best cut) or the cheapest split of k
+//! between its two children. A binary node can be opened when it is interior and holds more than `B` spheres: a subtree of at most `B` spheres
 //! becomes one leaf of one block (Embree makes subtrees of at most 8 spheres one leaf), and a binary leaf of more
 //! than `B` spheres (`leaf_size > B`) becomes one leaf of several blocks. So whatever the binary `leaf_size`,
 //! leaves fill their blocks: a leaf holds at most `max(leaf_size, B)` spheres, and only its last block is padded.
@@ -47,19 +50,7 @@ pub struct Tree<const W: usize, const B: usize, P: WidePrimitive = Sphere> {
 ///
 /// Collapses with the threads of the current rayon pool; the tree is identical whatever the thread count.
 pub fn collapse<P: WidePrimitive, const W: usize, const B: usize>(built: &BuiltTree<P>) -> Tree<W, B, P> {
-    // Sphere count and first position in the primitive order of every binary subtree (children follow parents).
-    let n = built.nodes.len();
-    let (mut count, mut start) = (vec![0u32; n], vec![0u32; n]);
-    for i in (0..n).rev() {
-        let node = &built.nodes[i];
-        if node.is_leaf() {
-            (count[i], start[i]) = (node.prim_count, node.first);
-        } else {
-            let f = node.first as usize;
-            (count[i], start[i]) = (count[f] + count[f + 1], start[f]);
-        }
-    }
-    let c = Collapser::<P, W, B> { built, count, start };
+    let c = Collapser::<P, W, B>::new(built);
     let spheres = built.prim_order.len();
     if spheres >= PARALLEL_COLLAPSE_MIN_PRIMS && rayon::current_num_threads() > 1 {
         return c.parallel();
@@ -68,6 +59,40 @@ pub fn collapse<P: WidePrimitive, const W: usize, const B: usize>(built: &BuiltT
     let mut nodes = Vec::new();
     c.node(&mut nodes, &mut blocks, 0);
     Tree { nodes, blocks }
+}
+
+/// The cheapest cuts: for binary node `b` and `k` children, `cuts[b][k - 1]` is how many of them its left child's
+/// subtree gets (the rest go to the right), or 0 when the cheapest is `b` itself as one child.
+///
+/// Computed children first (they follow their parents); the cost of covering `b` with at most `k` children is
+/// 0 for a node that cannot be opened (it is a leaf), else the least of `b` itself (its area plus its own cut's
+/// cost) and every split of `k` between its children. Ties open the node.
+fn cuts<P: WidePrimitive, const W: usize, const B: usize>(built: &BuiltTree<P>, count: &[u32]) -> Vec<[u8; W]> {
+    let n = built.nodes.len();
+    let (mut cost, mut cuts) = (vec![[0f32; W]; n], vec![[0u8; W]; n]);
+    for b in (0..n).rev() {
+        let node = &built.nodes[b];
+        if node.is_leaf() || count[b] as usize <= B {
+            continue;
+        }
+        let (l, r) = (node.first as usize, node.first as usize + 1);
+        let split = |k: usize| {
+            (1..k)
+                .map(|j| (cost[l][j - 1] + cost[r][k - j - 1], j as u8))
+                .fold((f32::INFINITY, 0), |a, c| if c.0 < a.0 { c } else { a })
+        };
+        let (own_cost, own_cut) = split(W);
+        let own = node.bounds.surface_area() + own_cost;
+        let (mut costs, mut cut) = ([own; W], [0u8; W]);
+        for k in 2..=W {
+            let (c, j) = if k == W { (own_cost, own_cut) } else { split(k) };
+            if c <= own {
+                (costs[k - 1], cut[k - 1]) = (c, j);
+            }
+        }
+        (cost[b], cuts[b]) = (costs, cut);
+    }
+    cuts
 }
 
 /// Where a collapse puts its leaf blocks: the tree's vector, or a parallel task's run of it.
@@ -111,37 +136,64 @@ struct Collapser<'a, P, const W: usize, const B: usize> {
     built: &'a BuiltTree<P>,
     count: Vec<u32>,
     start: Vec<u32>,
+    /// The cheapest cuts ([`cuts`]).
+    cuts: Vec<[u8; W]>,
 }
 
-impl<P: WidePrimitive, const W: usize, const B: usize> Collapser<'_, P, W, B> {
+impl<'a, P: WidePrimitive, const W: usize, const B: usize> Collapser<'a, P, W, B> {
+    /// The collapser of `built`: every binary subtree's sphere count and first position in the primitive order
+    /// (children follow parents), and the cheapest cuts.
+    fn new(built: &'a BuiltTree<P>) -> Self {
+        let n = built.nodes.len();
+        let (mut count, mut start) = (vec![0u32; n], vec![0u32; n]);
+        for i in (0..n).rev() {
+            let node = &built.nodes[i];
+            if node.is_leaf() {
+                (count[i], start[i]) = (node.prim_count, node.first);
+            } else {
+                let f = node.first as usize;
+                (count[i], start[i]) = (count[f] + count[f + 1], start[f]);
+            }
+        }
+        let cuts = cuts::<P, W, B>(built, &count);
+        Collapser { built, count, start, cuts }
+    }
+
     /// True when binary node `b` is interior with more than one block's spheres.
     fn openable(&self, b: usize) -> bool {
         !self.built.nodes[b].is_leaf() && self.count[b] as usize > B
     }
 
-    /// The binary nodes the wide node of binary node `b` gathers, `kids[..len]`, in left-to-right order.
+    /// The binary nodes the wide node of binary node `b` gathers, `kids[..len]`, in left-to-right order: its
+    /// cheapest cut into `W` (itself alone when it cannot be opened).
     #[inline(always)]
     fn gather(&self, b: usize) -> ([usize; W], usize) {
         let (mut kids, mut len) = ([0usize; W], 0);
-        if self.count[b] > 0 {
-            (kids[0], len) = (b, 1);
+        if self.count[b] == 0 {
+            return (kids, 0);
         }
-        while len < W {
-            let mut best: Option<(usize, f32)> = None;
-            for (i, &k) in kids[..len].iter().enumerate() {
-                if self.openable(k) {
-                    let area = self.built.nodes[k].bounds.surface_area();
-                    if best.is_none_or(|(_, a)| area > a) {
-                        best = Some((i, area));
-                    }
-                }
-            }
-            let Some((i, _)) = best else { break };
-            let first = self.built.nodes[kids[i]].first as usize;
-            kids.copy_within(i + 1..len, i + 2);
-            (kids[i], kids[i + 1], len) = (first, first + 1, len + 1);
+        if !self.openable(b) {
+            kids[0] = b;
+            return (kids, 1);
         }
+        let first = self.built.nodes[b].first as usize;
+        let j = self.cuts[b][W - 1] as usize;
+        self.cut(first, j, &mut kids, &mut len);
+        self.cut(first + 1, W - j, &mut kids, &mut len);
         (kids, len)
+    }
+
+    /// Appends to `kids` the cheapest cut of binary node `b` into at most `k` children.
+    fn cut(&self, b: usize, k: usize, kids: &mut [usize; W], len: &mut usize) {
+        let j = self.cuts[b][k - 1] as usize;
+        if j == 0 {
+            kids[*len] = b;
+            *len += 1;
+        } else {
+            let first = self.built.nodes[b].first as usize;
+            self.cut(first, j, kids, len);
+            self.cut(first + 1, k - j, kids, len);
+        }
     }
 
     /// Appends the wide node gathered from binary node `b` to `nodes` (then its descendants); returns its index.
@@ -330,14 +382,100 @@ mod tests {
         }
     }
 
-    #[test]
-    fn nodes_fill_up_until_only_leaves_are_left() {
-        let spheres = SceneKind::RandomSpheres.generate(5000, 1).spheres;
-        let built = builder::build(&spheres, &BvhParams { leaf_size: 1, ..BvhParams::default() });
-        let tree = collapse::<_, 8, 4>(&built);
-        for node in &tree.nodes {
-            assert!(node.len() == 8 || node.children[..node.len()].iter().all(|c| c.is_leaf()), "{node:?}");
+    /// A collapse's cost (the wide nodes' areas; the leaves are the same whatever the cut), each wide node's
+    /// children chosen by `gather`.
+    fn cost<const W: usize, const B: usize>(
+        c: &Collapser<'_, Sphere, W, B>,
+        gather: &dyn Fn(usize) -> Vec<usize>,
+        b: usize,
+    ) -> f64 {
+        let kids = gather(b);
+        let below: f64 = kids.iter().filter(|&&k| c.openable(k)).map(|&k| cost(c, gather, k)).sum();
+        c.built.nodes[b].bounds.surface_area() as f64 + below
+    }
+
+    /// Every way to cover binary node `b`'s subtree with at most `k` nodes, in left-to-right order.
+    fn all_cuts<const W: usize, const B: usize>(
+        c: &Collapser<'_, Sphere, W, B>,
+        b: usize,
+        k: usize,
+    ) -> Vec<Vec<usize>> {
+        let mut out = vec![vec![b]];
+        if c.openable(b) {
+            let f = c.built.nodes[b].first as usize;
+            for j in 1..k {
+                for left in all_cuts(c, f, j) {
+                    for right in all_cuts(c, f + 1, k - j) {
+                        out.push([left.clone(), right].concat());
+                    }
+                }
+            }
         }
-        assert!(tree.nodes.iter().any(|n| n.len() == 8));
+        out
+    }
+
+    /// The least cost of any collapse below binary node `b`, by trying every cut of every wide node (`memo`: the
+    /// nodes' least costs found so far).
+    fn least_cost<const W: usize, const B: usize>(
+        c: &Collapser<'_, Sphere, W, B>,
+        b: usize,
+        memo: &mut Vec<Option<f64>>,
+    ) -> f64 {
+        if let Some(cost) = memo[b] {
+            return cost;
+        }
+        let f = c.built.nodes[b].first as usize;
+        let mut best = f64::INFINITY;
+        for j in 1..W {
+            for left in all_cuts(c, f, j) {
+                for right in all_cuts(c, f + 1, W - j) {
+                    let kids = [left.clone(), right].concat();
+                    let below = kids.iter().filter(|&&k| c.openable(k)).map(|&k| least_cost(c, k, memo)).sum();
+                    best = best.min(below);
+                }
+            }
+        }
+        let cost = c.built.nodes[b].bounds.surface_area() as f64 + best;
+        memo[b] = Some(cost);
+        cost
+    }
+
+    /// The greedy collapse: the gathered child of largest area opened until there are `W` (tinybvh's way).
+    fn greedy<const W: usize, const B: usize>(c: &Collapser<'_, Sphere, W, B>, b: usize) -> Vec<usize> {
+        let mut kids = vec![b];
+        while kids.len() < W {
+            let area = |k: usize| c.built.nodes[k].bounds.surface_area();
+            let open = kids.iter().enumerate().filter(|(_, k)| c.openable(**k));
+            let Some((i, _)) = open.max_by(|a, b| area(*a.1).total_cmp(&area(*b.1))) else { break };
+            let f = c.built.nodes[kids[i]].first as usize;
+            kids.splice(i..=i, [f, f + 1]);
+        }
+        kids
+    }
+
+    #[test]
+    fn cuts_cost_the_least_of_every_collapse() {
+        for (n, seed) in [(40, 1), (90, 2), (150, 3)] {
+            let spheres = SceneKind::ClusteredSpheres.generate(n, seed).spheres;
+            let built = builder::build(&spheres, &BvhParams { leaf_size: 1, ..BvhParams::default() });
+            let c = Collapser::<Sphere, 4, 2>::new(&built);
+            let ours = cost(&c, &|b| c.gather(b).0[..c.gather(b).1].to_vec(), 0);
+            let least = least_cost(&c, 0, &mut vec![None; built.nodes.len()]);
+            assert!((ours - least).abs() <= 1e-5 * least, "{n} spheres: cuts cost {ours}, the least is {least}");
+        }
+    }
+
+    #[test]
+    fn cuts_cost_no_more_than_the_greedy_collapse() {
+        for scene in [SceneKind::RandomSpheres, SceneKind::ClusteredSpheres] {
+            let spheres = scene.generate(5000, 1).spheres;
+            for split in Split::ALL {
+                let built = builder::build(&spheres, &BvhParams { split, leaf_size: 1, ..BvhParams::default() });
+                let c = Collapser::<Sphere, 8, 4>::new(&built);
+                let ours = cost(&c, &|b| c.gather(b).0[..c.gather(b).1].to_vec(), 0);
+                let greedy = cost(&c, &|b| greedy(&c, b), 0);
+                assert!(ours <= greedy * (1.0 + 1e-6), "{scene:?} {split:?}: cuts {ours}, greedy {greedy}");
+            }
+        }
     }
 }
