@@ -5,8 +5,8 @@
 //! the leaves fixed as below): every wide node costs its box's surface area, and leaves cost the same whatever the
 //! cut, so for each binary node and each number of children k ≤ `W` the cheapest way to cover its subtree with k
 //! children is either the node itself (a leaf, or a wide node of its own best cut) or the cheapest split of k
-//! between its two children. A binary node can be opened when it is interior and holds more than `B` spheres: a subtree of at most `B` spheres
-//! becomes one leaf of one block (Embree makes subtrees of at most 8 spheres one leaf), and a binary leaf of more
+//! between its two children. A binary node can be opened when it is interior and holds more than `B` spheres: a
+//! subtree of at most `B` spheres becomes one leaf of one block (Embree makes subtrees of at most 8 spheres one leaf), and a binary leaf of more
 //! than `B` spheres (`leaf_size > B`) becomes one leaf of several blocks. So whatever the binary `leaf_size`,
 //! leaves fill their blocks: a leaf holds at most `max(leaf_size, B)` spheres, and only its last block is padded.
 //! Children keep the binary tree's left-to-right order; wide nodes and leaf blocks come out in depth-first order.
@@ -61,40 +61,6 @@ pub fn collapse<P: WidePrimitive, const W: usize, const B: usize>(built: &BuiltT
     Tree { nodes, blocks }
 }
 
-/// The cheapest cuts: for binary node `b` and `k` children, `cuts[b][k - 1]` is how many of them its left child's
-/// subtree gets (the rest go to the right), or 0 when the cheapest is `b` itself as one child.
-///
-/// Computed children first (they follow their parents); the cost of covering `b` with at most `k` children is
-/// 0 for a node that cannot be opened (it is a leaf), else the least of `b` itself (its area plus its own cut's
-/// cost) and every split of `k` between its children. Ties open the node.
-fn cuts<P: WidePrimitive, const W: usize, const B: usize>(built: &BuiltTree<P>, count: &[u32]) -> Vec<[u8; W]> {
-    let n = built.nodes.len();
-    let (mut cost, mut cuts) = (vec![[0f32; W]; n], vec![[0u8; W]; n]);
-    for b in (0..n).rev() {
-        let node = &built.nodes[b];
-        if node.is_leaf() || count[b] as usize <= B {
-            continue;
-        }
-        let (l, r) = (node.first as usize, node.first as usize + 1);
-        let split = |k: usize| {
-            (1..k)
-                .map(|j| (cost[l][j - 1] + cost[r][k - j - 1], j as u8))
-                .fold((f32::INFINITY, 0), |a, c| if c.0 < a.0 { c } else { a })
-        };
-        let (own_cost, own_cut) = split(W);
-        let own = node.bounds.surface_area() + own_cost;
-        let (mut costs, mut cut) = ([own; W], [0u8; W]);
-        for k in 2..=W {
-            let (c, j) = if k == W { (own_cost, own_cut) } else { split(k) };
-            if c <= own {
-                (costs[k - 1], cut[k - 1]) = (c, j);
-            }
-        }
-        (cost[b], cuts[b]) = (costs, cut);
-    }
-    cuts
-}
-
 /// Where a collapse puts its leaf blocks: the tree's vector, or a parallel task's run of it.
 trait Blocks<P: WidePrimitive, const B: usize> {
     /// Blocks put so far.
@@ -136,7 +102,7 @@ struct Collapser<'a, P, const W: usize, const B: usize> {
     built: &'a BuiltTree<P>,
     count: Vec<u32>,
     start: Vec<u32>,
-    /// The cheapest cuts ([`cuts`]).
+    /// The cheapest cuts ([`Collapser::cheapest_cuts`]).
     cuts: Vec<[u8; W]>,
 }
 
@@ -155,8 +121,43 @@ impl<'a, P: WidePrimitive, const W: usize, const B: usize> Collapser<'a, P, W, B
                 (count[i], start[i]) = (count[f] + count[f + 1], start[f]);
             }
         }
-        let cuts = cuts::<P, W, B>(built, &count);
-        Collapser { built, count, start, cuts }
+        let mut c = Collapser { built, count, start, cuts: Vec::new() };
+        c.cuts = c.cheapest_cuts();
+        c
+    }
+
+    /// The cheapest cuts: for binary node `b` and `k` children, `cuts[b][k - 1]` is how many of them its left child's
+    /// subtree gets (the rest go to the right), or 0 when the cheapest is `b` itself as one child.
+    ///
+    /// Computed children first (they follow their parents); the cost of covering `b` with at most `k` children is
+    /// 0 for a node that cannot be opened (it is a leaf), else the least of `b` itself (its area plus its own cut's
+    /// cost) and every split of `k` between its children. Ties open the node.
+    fn cheapest_cuts(&self) -> Vec<[u8; W]> {
+        let n = self.built.nodes.len();
+        let (mut cost, mut cuts) = (vec![[0f32; W]; n], vec![[0u8; W]; n]);
+        for b in (0..n).rev() {
+            if !self.openable(b) {
+                continue;
+            }
+            let node = &self.built.nodes[b];
+            let (l, r) = (node.first as usize, node.first as usize + 1);
+            let split = |k: usize| {
+                (1..k)
+                    .map(|j| (cost[l][j - 1] + cost[r][k - j - 1], j as u8))
+                    .fold((f32::INFINITY, 0), |a, c| if c.0 < a.0 { c } else { a })
+            };
+            let (own_cost, own_cut) = split(W);
+            let own = node.bounds.surface_area() + own_cost;
+            let (mut costs, mut cut) = ([own; W], [0u8; W]);
+            for k in 2..=W {
+                let (c, j) = if k == W { (own_cost, own_cut) } else { split(k) };
+                if c <= own {
+                    (costs[k - 1], cut[k - 1]) = (c, j);
+                }
+            }
+            (cost[b], cuts[b]) = (costs, cut);
+        }
+        cuts
     }
 
     /// True when binary node `b` is interior with more than one block's spheres.
@@ -394,6 +395,12 @@ mod tests {
         c.built.nodes[b].bounds.surface_area() as f64 + below
     }
 
+    /// The binary nodes `c` gathers for binary node `b`'s wide node.
+    fn gathered<const W: usize, const B: usize>(c: &Collapser<'_, Sphere, W, B>, b: usize) -> Vec<usize> {
+        let (kids, len) = c.gather(b);
+        kids[..len].to_vec()
+    }
+
     /// Every way to cover binary node `b`'s subtree with at most `k` nodes, in left-to-right order.
     fn all_cuts<const W: usize, const B: usize>(
         c: &Collapser<'_, Sphere, W, B>,
@@ -459,7 +466,7 @@ mod tests {
             let spheres = SceneKind::ClusteredSpheres.generate(n, seed).spheres;
             let built = builder::build(&spheres, &BvhParams { leaf_size: 1, ..BvhParams::default() });
             let c = Collapser::<Sphere, 4, 2>::new(&built);
-            let ours = cost(&c, &|b| c.gather(b).0[..c.gather(b).1].to_vec(), 0);
+            let ours = cost(&c, &|b| gathered(&c, b), 0);
             let least = least_cost(&c, 0, &mut vec![None; built.nodes.len()]);
             assert!((ours - least).abs() <= 1e-5 * least, "{n} spheres: cuts cost {ours}, the least is {least}");
         }
@@ -472,7 +479,7 @@ mod tests {
             for split in Split::ALL {
                 let built = builder::build(&spheres, &BvhParams { split, leaf_size: 1, ..BvhParams::default() });
                 let c = Collapser::<Sphere, 8, 4>::new(&built);
-                let ours = cost(&c, &|b| c.gather(b).0[..c.gather(b).1].to_vec(), 0);
+                let ours = cost(&c, &|b| gathered(&c, b), 0);
                 let greedy = cost(&c, &|b| greedy(&c, b), 0);
                 assert!(ours <= greedy * (1.0 + 1e-6), "{scene:?} {split:?}: cuts {ours}, greedy {greedy}");
             }
