@@ -383,7 +383,34 @@ fn claims_table(md: &mut String, spec: &ReportSpec, claims: &[ClaimResult]) {
         );
     }
     md.push_str("\nRatios are `metric(than) / metric(series)` per object count, pooled over seeds.\n\n");
+    claim_failures(md, spec, claims);
     claim_points(md, spec, claims);
+}
+
+/// The config's `if_fails` of every claim that fails somewhere: why, as measured apart, with the points it fails at.
+fn claim_failures(md: &mut String, spec: &ReportSpec, claims: &[ClaimResult]) {
+    let failing: Vec<_> = spec
+        .claims
+        .iter()
+        .zip(claims)
+        .filter_map(|(s, c)| Some((s.if_fails.as_deref()?, c)))
+        .filter(|(_, c)| c.verdict == Verdict::Fails || c.points.iter().any(|p| p.verdict == Verdict::Fails))
+        .collect();
+    if failing.is_empty() {
+        return;
+    }
+    md.push_str("### Why claims fail\n\n");
+    for (why, claim) in failing {
+        let at: Vec<&str> =
+            claim.points.iter().filter(|p| p.verdict == Verdict::Fails).map(|p| p.label.as_str()).collect();
+        let at = match at.len() {
+            0 => String::new(),
+            1..=4 => format!(" (fails at {})", at.join("; ")),
+            n => format!(" (fails at {n} of {} points)", claim.points.len()),
+        };
+        let _ = writeln!(md, "- **{}**{at}: {}", claim.text.replace('\n', " "), why.replace('\n', " "));
+    }
+    md.push('\n');
 }
 
 /// Every point of each claim compared at more than one point: where it holds and where it does not.

@@ -92,6 +92,8 @@ pub struct ClaimSpec {
     pub text: String,
     /// What the seed paper said on this point, when the claim reproduces one of its statements.
     pub paper: Option<String>,
+    /// Why the claim fails where it does, as measured apart (a profile, counted work): printed only where it fails.
+    pub if_fails: Option<String>,
     /// What is compared.
     pub kind: ClaimKind,
     /// Metric column compared (a time: smaller is better).

@@ -21,7 +21,7 @@ const TABLES: &str = "\
 | `[[exclude]]` | settings (and/or `series`) whose every match is skipped |
 | `[quick]` | overrides for `--quick`: repetitions (and the auto keys), warmups, settings |
 | `[[plot]]` | `file`, `title`, `kind` (`metric`, `speedup`, `efficiency`, `trade-off`: metric `x` against metric `y`, one point per series), `x` (a setting: numbers on a numeric axis, words such as `workload` as categories), `y` (a metric), `log_x`, `log_y`, `series`, `where`, `reference` (the series a speedup plot compares with, instead of the experiment's) |
-| `[[claim]]` | `text`, `paper`, `kind` (`faster` with `factor` and `per_thread`, or `within` with `tolerance`), `series`, `than`, `metric`, `min_objects`, `max_objects`, `where` |
+| `[[claim]]` | `text`, `paper`, `if_fails` (why it fails where it does, printed only then), `kind` (`faster` with `factor` and `per_thread`, or `within` with `tolerance`), `series`, `than`, `metric`, `min_objects`, `max_objects`, `where` |
 ";
 
 /// The whole text of configuration.md.

@@ -499,6 +499,7 @@ fn parse_claim(c: &Section<'_>, labels: &Labels) -> Result<ClaimSpec, Error> {
     c.only(&[
         "text",
         "paper",
+        "if_fails",
         "kind",
         "series",
         "than",
@@ -535,6 +536,7 @@ fn parse_claim(c: &Section<'_>, labels: &Labels) -> Result<ClaimSpec, Error> {
     Ok(ClaimSpec {
         text,
         paper: c.string("paper")?.map(str::to_string),
+        if_fails: c.string("if_fails")?.map(str::to_string),
         kind,
         metric: metric(c, "metric")?,
         min_objects: objects("min_objects")?,
