@@ -6,9 +6,10 @@
 //! cut, so for each binary node and each number of children k ≤ `W` the cheapest way to cover its subtree with k
 //! children is either the node itself (a leaf, or a wide node of its own best cut) or the cheapest split of k
 //! between its two children. A binary node can be opened when it is interior and holds more than `B` spheres: a
-//! subtree of at most `B` spheres becomes one leaf of one block (Embree makes subtrees of at most 8 spheres one leaf), and a binary leaf of more
-//! than `B` spheres (`leaf_size > B`) becomes one leaf of several blocks. So whatever the binary `leaf_size`,
-//! leaves fill their blocks: a leaf holds at most `max(leaf_size, B)` spheres, and only its last block is padded.
+//! subtree of at most `B` spheres becomes one leaf of one block (Embree makes subtrees of at most 8 spheres one
+//! leaf), and a binary leaf of more than `B` spheres (`leaf_size > B`) becomes one leaf of several blocks. So
+//! whatever the binary `leaf_size`, leaves fill their blocks: a leaf holds at most `max(leaf_size, B)` spheres, and
+//! only its last block is padded.
 //! Children keep the binary tree's left-to-right order; wide nodes and leaf blocks come out in depth-first order.
 //!
 //! Trees of [`PARALLEL_COLLAPSE_MIN_PRIMS`] spheres or more, in a pool of more than one thread, collapse in
