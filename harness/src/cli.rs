@@ -399,6 +399,10 @@ pub struct SiteArgs {
 pub struct ReportArgs {
     /// A run folder (holding runs.csv and experiment.toml).
     pub dir: PathBuf,
+    /// Another run of the same config (e.g. the committed one, moved into DIR/previous/ by the run): exit 1 when a
+    /// claim that held there fails here at every point, naming it.
+    #[arg(long, value_name = "RUN_DIR")]
+    pub claims_against: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]

@@ -258,7 +258,43 @@ fn report_command(args: &ReportArgs) -> Result<(), Error> {
         return Err(Error::Input(format!("{}: no {} here (not a run folder)", args.dir.display(), run::RUNS_CSV)));
     }
     let exp = Experiment::load(&path)?;
-    write_report(&args.dir, &exp, vec![]).map(|_| ())
+    write_report(&args.dir, &exp, vec![])?;
+    match &args.claims_against {
+        Some(recorded) => claims_against(&args.dir, recorded, &exp),
+        None => Ok(()),
+    }
+}
+
+/// Fails, naming them, when claims that held in the rows of `recorded` fail at every point in those of `dir`
+/// (`harness report DIR --claims-against RECORDED`: CI's guard on the main job's answers).
+fn claims_against(dir: &Path, recorded: &Path, exp: &Experiment) -> Result<(), Error> {
+    let runs = recorded.join(run::RUNS_CSV);
+    if !runs.is_file() {
+        return Err(Error::Input(format!(
+            "--claims-against {}: no {} here (allowed: a run folder of the same config)",
+            recorded.display(),
+            run::RUNS_CSV
+        )));
+    }
+    let lost = report::lost_claims(recorded, dir, &exp.report_spec(vec![])).map_err(|e| Error::Input(e.to_string()))?;
+    for c in &lost {
+        note!(
+            "claim lost: \"{}\" held in {} and fails here at all {} points (least favourable {:.3} [{:.3}, {:.3}], {})",
+            c.text,
+            recorded.display(),
+            c.points.len(),
+            c.ratio,
+            c.lo,
+            c.hi,
+            c.detail
+        );
+    }
+    if lost.is_empty() {
+        say!("claims: none that held in {} fails at every point here", recorded.display());
+        Ok(())
+    } else {
+        Err(Error::Run(format!("{} claim(s) held in {} and fail here at every point", lost.len(), recorded.display())))
+    }
 }
 
 /// Writes the static site of `--results` into `--out`: every experiment folder with its experiment.toml's spec.

@@ -100,7 +100,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
     let triangles = scene.triangles();
     let scene_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let built = setup.install(|| backend.build(&settings, &scene.geometry(), &setup))?;
+    let built = setup.build(backend, &settings, &scene.geometry())?;
     let build_s = t1.elapsed().as_secs_f64();
     let (job, strategy) = (scene.render(&settings, &triangles), settings.strategy());
     let t2 = Instant::now();

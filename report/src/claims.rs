@@ -96,6 +96,15 @@ pub fn check_all(rows: &Rows, spec: &ReportSpec) -> Vec<ClaimResult> {
     spec.claims.iter().map(|claim| check(rows, spec, claim)).collect()
 }
 
+/// The claims of `now` that held in `recorded` (matched by their text) and fail at every point of `now`: an answer
+/// that the code no longer gives.
+pub fn lost<'a>(recorded: &[ClaimResult], now: &'a [ClaimResult]) -> Vec<&'a ClaimResult> {
+    let held = |text: &str| recorded.iter().any(|r| r.text == text && r.verdict == Verdict::Holds);
+    let fails_everywhere =
+        |c: &ClaimResult| !c.points.is_empty() && c.points.iter().all(|p| p.verdict == Verdict::Fails);
+    now.iter().filter(|c| fails_everywhere(c) && held(&c.text)).collect()
+}
+
 /// Checks one claim.
 pub fn check(rows: &Rows, spec: &ReportSpec, claim: &ClaimSpec) -> ClaimResult {
     let (series, than) = match &claim.kind {
@@ -429,5 +438,40 @@ mod tests {
         assert_eq!(More::to_settle(e, &within, 0.02, &provenance(40, 1)), Some(More::Runs(120)));
         assert_eq!(More::to_settle(e, &within, 0.02, &provenance(40, 0)), Some(More::Runs(120)));
         assert_eq!(More::Processes(24).to_string(), "~24 more processes");
+    }
+
+    #[test]
+    fn a_claim_is_lost_only_when_it_held_and_now_fails_at_every_point() {
+        let point = |verdict| PointResult {
+            label: String::new(),
+            ratio: 1.0,
+            lo: 1.0,
+            hi: 1.0,
+            threshold: 1.0,
+            verdict,
+            more: None,
+            threads: 1.0,
+        };
+        let claim = |text: &str, verdict, points: &[Verdict]| ClaimResult {
+            text: text.into(),
+            verdict,
+            ratio: 1.0,
+            lo: 1.0,
+            hi: 1.0,
+            threshold: 1.0,
+            detail: String::new(),
+            points: points.iter().map(|&v| point(v)).collect(),
+        };
+        use Verdict::{Fails, Holds, Inconclusive};
+        let then = [claim("a", Holds, &[Holds]), claim("b", Holds, &[Holds]), claim("c", Fails, &[Fails])];
+        let now = [
+            claim("a", Fails, &[Fails, Fails]),
+            claim("b", Fails, &[Fails, Inconclusive]),
+            claim("c", Fails, &[Fails]),
+            claim("d", Fails, &[Fails]),
+        ];
+        let lost: Vec<&str> = lost(&then, &now).iter().map(|c| c.text.as_str()).collect();
+        assert_eq!(lost, ["a"], "b is not failing everywhere, c never held, d is new");
+        assert!(super::lost(&then, &[claim("a", Fails, &[])]).is_empty(), "no points: nothing measured");
     }
 }

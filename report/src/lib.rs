@@ -44,6 +44,14 @@ pub fn distinct<T: PartialEq>(values: impl IntoIterator<Item = T>) -> Vec<T> {
     out
 }
 
+/// The claims of `spec` that held in the rows of the run folder `recorded` and fail at every point in those of
+/// `dir`: answers the code no longer gives ([`claims::lost`]).
+pub fn lost_claims(recorded: &Path, dir: &Path, spec: &ReportSpec) -> Result<Vec<ClaimResult>, Error> {
+    let then = claims::check_all(&rows::read(&recorded.join("runs.csv"))?, spec);
+    let now = claims::check_all(&rows::read(&dir.join("runs.csv"))?, spec);
+    Ok(claims::lost(&then, &now).into_iter().cloned().collect())
+}
+
 /// What `write` produced.
 #[derive(Clone, Debug)]
 pub struct Outcome {

@@ -441,9 +441,9 @@ impl Settings {
         AccelParams { kind, bvh, wide }
     }
 
-    /// The strategy and its thread count (`threads = "all"` must have been resolved).
+    /// The strategy and its thread count (`threads = "all"`: this machine's logical cores, as a plan resolves it).
     pub fn strategy(&self) -> Strategy {
-        Strategy::new(self.strategy, self.threads.resolve(1) as usize)
+        Strategy::new(self.strategy, self.threads.here() as usize)
     }
 
     /// The peer backend, if the accelerator is one.

@@ -466,6 +466,16 @@ impl Threads {
             Threads::Count(n) => n,
         }
     }
+
+    /// The logical cores this process may use: what `all` means on this machine.
+    pub fn cores_here() -> usize {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    }
+
+    /// The thread count on this machine ([`Threads::resolve`] with [`Threads::cores_here`]).
+    pub fn here(self) -> u32 {
+        self.resolve(Threads::cores_here())
+    }
 }
 
 impl fmt::Display for Threads {

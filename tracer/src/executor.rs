@@ -9,6 +9,9 @@
 //!   (a static split); each renders into its own buffer and sends it through an mpsc channel to the
 //!   calling thread, which copies it into place.
 //!
+//! With two threads or more, each worker is pinned to a CPU of its own ([`crate::pinning`]): the band threads and
+//! the pool built for a call alike (a caller's own pool pins its threads itself).
+//!
 //! Every strategy computes each row with the same function, so images are bit-identical across them.
 
 use std::fmt;
@@ -18,6 +21,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::counters::Counters;
+use crate::pinning;
 
 /// Bands per thread for `rayon-bands`: more bands than threads lets stealing even out uneven rows.
 pub const RAYON_BANDS_PER_THREAD: usize = 4;
@@ -145,8 +149,10 @@ impl Strategy {
                 if rayon::current_thread_index().is_some() && rayon::current_num_threads() == threads {
                     bands()
                 } else {
+                    let cpus = pinning::cpus_for(threads);
                     let pool = rayon::ThreadPoolBuilder::new()
                         .num_threads(threads)
+                        .start_handler(move |i| pinning::pin_worker(&cpus, i))
                         .build()
                         .expect("building a rayon thread pool");
                     pool.install(bands)
@@ -156,12 +162,15 @@ impl Strategy {
                 let bands = threads.clamp(1, height.max(1));
                 let (sender, receiver) = mpsc::channel::<(usize, Vec<T>, C)>();
                 let band = &band;
+                let cpus = &pinning::cpus_for(bands);
                 std::thread::scope(|scope| {
                     for b in 0..bands {
                         let sender = sender.clone();
                         let rows = band_rows(b, bands, height);
                         let (first_row, rows) = (rows.start, rows.len());
                         scope.spawn(move || {
+                            // Its own CPU, not the spawning thread's mask (which may be one pinned CPU).
+                            pinning::pin_worker(cpus, b);
                             let mut buffer = vec![T::default(); rows * width];
                             let counters = band(first_row, &mut buffer);
                             sender.send((first_row, buffer, counters)).expect("the receiver outlives the band threads");
@@ -205,6 +214,32 @@ mod tests {
         let other_size = pool(3).install(|| row_threads(strategy));
         assert!(other_size.iter().all(|n| !n.starts_with("setup-")), "{other_size:?}");
         assert!(row_threads(strategy).iter().all(|n| !n.starts_with("setup-")));
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn every_strategys_workers_run_on_distinct_cpus_even_when_spawned_from_a_pinned_thread() {
+        use crate::testing::threads::{distinct_or_unpinned, worker_cpus};
+        let allowed = crate::pinning::allowed_cpus();
+        for kind in StrategyKind::ALL {
+            let strategy = Strategy::new(kind, 2);
+            // From an unpinned thread, and from a thread pinned to one CPU (as a caller's pool thread is).
+            let free = std::thread::spawn(move || worker_cpus(strategy)).join().unwrap();
+            let from_pinned = std::thread::spawn(move || {
+                crate::pinning::pin_worker(&[crate::pinning::allowed_cpus()[0]], 0);
+                worker_cpus(strategy)
+            })
+            .join()
+            .unwrap();
+            for (from, workers) in [("an unpinned thread", free), ("a pinned thread", from_pinned)] {
+                if kind == StrategyKind::MpscThreads {
+                    assert_eq!(workers.len(), 2, "{kind:?} from {from}: one thread per band");
+                }
+                assert!(distinct_or_unpinned(&workers, &allowed), "{kind:?}×2 from {from}: {workers:?}");
+            }
+        }
+        assert!(!distinct_or_unpinned(&[vec![0], vec![0]], &[0, 1]), "two workers on one CPU");
+        assert!(distinct_or_unpinned(&[vec![0], vec![1]], &[0, 1]) && distinct_or_unpinned(&[vec![0, 1]], &[0, 1]));
     }
 
     #[test]

@@ -22,6 +22,7 @@ pub mod fingerprint;
 pub mod geometry;
 pub mod job;
 pub mod parallel;
+pub mod pinning;
 pub mod rays;
 pub mod render;
 pub mod rng;

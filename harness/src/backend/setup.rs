@@ -3,11 +3,14 @@
 use std::any::Any;
 
 use schema::Settings;
+use tracer::pinning;
 
+use super::workload::bvhlab_phase_build;
+use super::{Backend, Built, Geometry};
 use crate::error::Error;
 
 /// The rayon pool of the configured threads that builds and traces run in (two or more each pinned to a CPU of its
-/// own: [`pinning`]), and what the backend started ([`super::Backend::start`]: Embree's library and device).
+/// own: [`tracer::pinning`]), and what the backend started ([`super::Backend::start`]: Embree's library and device).
 pub struct Setup {
     pool: rayon::ThreadPool,
     started: Option<Box<dyn Any + Send + Sync>>,
@@ -23,11 +26,7 @@ impl Setup {
         let cpus = pinning::cpus_for(threads);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
-            .start_handler(move |i| {
-                if let Some(cpu) = cpus.get(i) {
-                    pinning::pin_current_thread(*cpu);
-                }
-            })
+            .start_handler(move |i| pinning::pin_worker(&cpus, i))
             .build()
             .map_err(|e| Error::Run(format!("cannot start a pool of {threads} threads: {e}")))?;
         // Every worker thread started before the clock stops.
@@ -41,90 +40,115 @@ impl Setup {
         self.pool.install(f)
     }
 
+    /// Builds `backend`'s structure for `settings` over `geometry`: in the pool, or, for a backend with threads of
+    /// its own (Embree's TBB), on the calling thread, whose workers then inherit its CPUs and not a pinned pool
+    /// thread's one. `run` and `render` build here alike.
+    pub fn build(&self, backend: &dyn Backend, settings: &Settings, geometry: &Geometry<'_>) -> Result<Built, Error> {
+        if backend.own_threads() {
+            backend.build(settings, geometry, self)
+        } else {
+            // The phase function runs in the pool (installing from inside the pool again, as the backends' builds
+            // do, runs in place), where callgrind sees the building thread enter it.
+            self.install(|| bvhlab_phase_build(|| backend.build(settings, geometry, self)))
+        }
+    }
+
     /// What the backend started, as the type it started.
     pub fn started<T: 'static>(&self) -> Option<&T> {
         self.started.as_ref().and_then(|s| s.downcast_ref())
     }
 }
 
-/// Pool threads pinned to distinct CPUs.
-///
-/// Why: a pool's threads sleep between passes, and a pass (1–3 ms on a small mesh) is shorter than the
-/// scheduler's load balancing; woken each time, both threads of a two-thread pool can land on one vCPU and stay
-/// there for a whole sample, which then takes 2.0× as long. In a recording of `meshes.toml` at 379dacc (2-vCPU VM)
-/// 6% of the two-thread samples of in-process backends did (docs/statistics.md). Pinned, the pool's threads run on
-/// different CPUs, in this process and in Embree's worker alike; one-thread pools stay unpinned.
-pub mod pinning {
-    /// The CPUs a pool of `threads` threads pins its threads to: the first `threads` CPUs this process may run on;
-    /// none for one thread, or when the process may use fewer CPUs than that (threads then share them).
-    pub fn cpus_for(threads: usize) -> Vec<usize> {
+#[cfg(all(test, target_os = "linux"))]
+mod tests {
+    use std::collections::BTreeMap;
+    use std::process::Command;
+
+    use tracer::executor::StrategyKind;
+    use tracer::pinning::allowed_cpus;
+    use tracer::testing::threads::{distinct_or_unpinned, worker_cpus};
+
+    use super::*;
+    use crate::render::settings_of;
+    use crate::run::measure::make_scene;
+
+    fn settings(set: &[&str]) -> Settings {
+        settings_of(&set.iter().map(|s| s.to_string()).collect::<Vec<_>>()).unwrap()
+    }
+
+    #[test]
+    fn every_strategys_workers_run_on_distinct_cpus_in_a_setups_pinned_pool() {
         let allowed = allowed_cpus();
-        if threads < 2 || allowed.len() < threads {
-            return Vec::new();
-        }
-        allowed[..threads].to_vec()
-    }
-
-    /// The CPUs this process may run on, in order (empty where that is not known). The process id names the main
-    /// thread, which is never pinned, so a pool started from a pinned thread still sees every CPU.
-    #[cfg(target_os = "linux")]
-    pub fn allowed_cpus() -> Vec<usize> {
-        // SAFETY: getpid cannot fail.
-        affinity(unsafe { libc::getpid() })
-    }
-
-    /// The CPUs thread or process `id` may run on (0: the calling thread).
-    #[cfg(target_os = "linux")]
-    fn affinity(id: libc::pid_t) -> Vec<usize> {
-        // SAFETY: `set` is a plain bit set that the call fills; its size is passed.
-        unsafe {
-            let mut set: libc::cpu_set_t = std::mem::zeroed();
-            if libc::sched_getaffinity(id, std::mem::size_of::<libc::cpu_set_t>(), &mut set) != 0 {
-                return Vec::new();
+        for kind in StrategyKind::ALL {
+            let s = settings(&[&format!("strategy={}", kind.name()), "threads=2"]);
+            let setup = Setup::start(&s).unwrap();
+            let workers = setup.install(|| worker_cpus(s.strategy()));
+            assert!(distinct_or_unpinned(&workers, &allowed), "{kind:?}×2 in the pool: {workers:?}");
+            if kind == StrategyKind::MpscThreads && allowed.len() >= 2 {
+                assert_eq!(workers.len(), 2, "one band thread per thread");
+                assert!(workers.iter().all(|w| w.len() == 1), "pinned like the pool's threads: {workers:?}");
             }
-            (0..libc::CPU_SETSIZE as usize).filter(|&c| libc::CPU_ISSET(c, &set)).collect()
         }
     }
 
-    /// The CPUs this process may run on, in order (empty where that is not known).
-    #[cfg(not(target_os = "linux"))]
-    pub fn allowed_cpus() -> Vec<usize> {
-        Vec::new()
-    }
-
-    /// Pins the calling thread to `cpu` (a no-op where that is not supported, or when the call fails).
-    pub fn pin_current_thread(cpu: usize) {
-        #[cfg(target_os = "linux")]
-        // SAFETY: `set` is a plain bit set with one bit set; its size is passed; 0 names the calling thread.
-        unsafe {
-            let mut set: libc::cpu_set_t = std::mem::zeroed();
-            libc::CPU_SET(cpu, &mut set);
-            libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set);
+    /// Every thread of this process and the CPUs it may run on (`/proc/self/task/*/status`).
+    fn threads_here() -> BTreeMap<String, Vec<usize>> {
+        let cpus = |list: &str| -> Vec<usize> {
+            let range = |r: &str| match r.split_once('-') {
+                Some((a, b)) => (a.parse().unwrap()..=b.parse().unwrap()).collect::<Vec<usize>>(),
+                None => vec![r.parse().unwrap()],
+            };
+            list.split(',').flat_map(range).collect()
+        };
+        let mut out = BTreeMap::new();
+        for task in std::fs::read_dir("/proc/self/task").unwrap() {
+            let task = task.unwrap();
+            let Ok(status) = std::fs::read_to_string(task.path().join("status")) else { continue };
+            if let Some(list) = status.lines().find_map(|l| l.strip_prefix("Cpus_allowed_list:")) {
+                out.insert(task.file_name().to_string_lossy().into_owned(), cpus(list.trim()));
+            }
         }
-        #[cfg(not(target_os = "linux"))]
-        let _ = cpu;
+        out
     }
 
-    #[cfg(all(test, target_os = "linux"))]
-    mod tests {
-        use super::*;
-
-        #[test]
-        fn a_pinned_thread_runs_only_on_its_cpu() {
-            let allowed = allowed_cpus();
-            assert!(!allowed.is_empty());
-            let cpu = *allowed.last().unwrap();
-            let (thread, process) = std::thread::spawn(move || {
-                pin_current_thread(cpu);
-                (affinity(0), allowed_cpus())
-            })
-            .join()
+    /// Embree builds on TBB's threads, which inherit the mask of the thread that starts them: built where `run` and
+    /// `render` build ([`Setup::build`]) in a two-thread setup, every thread the setup and the build started runs on
+    /// a CPU of its own or on all of them. In a process of its own (this test binary again, running
+    /// [`embree_build_threads_in_a_fresh_process`]), so that the threads it sees are the setup's and Embree's.
+    #[test]
+    fn embree_build_threads_run_on_distinct_cpus_or_all() {
+        if crate::peers::testing::embree_device("embree_build_threads_run_on_distinct_cpus_or_all").is_none() {
+            return;
+        }
+        let child = "backend::setup::tests::embree_build_threads_in_a_fresh_process";
+        let out = Command::new(std::env::current_exe().unwrap())
+            .args(["--exact", child, "--ignored", "--test-threads=1", "--nocapture"])
+            .output()
             .unwrap();
-            assert_eq!(thread, vec![cpu]);
-            assert_eq!(process, allowed);
-            assert!(cpus_for(1).is_empty());
-            assert_eq!(cpus_for(allowed.len()), allowed);
-            assert!(cpus_for(allowed.len() + 1).is_empty());
+        let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+        assert!(out.status.success() && text.contains("1 passed"), "{text}");
+    }
+
+    #[test]
+    #[ignore = "run in a process of its own by embree_build_threads_run_on_distinct_cpus_or_all"]
+    fn embree_build_threads_in_a_fresh_process() {
+        let allowed = allowed_cpus();
+        let before = threads_here();
+        let s = settings(&["accel=embree", "objects=100000", "strategy=rayon-bands", "threads=2"]);
+        let setup = Setup::start(&s).unwrap();
+        let scene = make_scene(&s, None);
+        setup.build(super::super::of(s.accel), &s, &scene.geometry()).unwrap();
+        let started: Vec<Vec<usize>> =
+            threads_here().into_iter().filter(|(t, _)| !before.contains_key(t)).map(|(_, c)| c).collect();
+        // The pool's two threads and at least one of TBB's.
+        assert!(started.len() > 2, "threads started: {started:?}");
+        if allowed.len() < 2 {
+            assert!(started.iter().all(|c| *c == allowed), "{started:?}");
+            return;
         }
+        let (pinned, free): (Vec<_>, Vec<_>) = started.iter().cloned().partition(|c| c.len() == 1);
+        assert_eq!(pinned.len(), 2, "the pool's threads, and no other: {started:?}");
+        assert!(distinct_or_unpinned(&pinned, &allowed), "the pool's threads: {started:?}");
+        assert!(free.iter().all(|c| *c == allowed), "Embree's threads may run anywhere: {started:?}");
     }
 }

@@ -16,7 +16,7 @@ pub mod obvhs;
 pub mod tinybvh;
 
 #[cfg(test)]
-mod testing;
+pub(crate) mod testing;
 
 use serde::{Deserialize, Serialize};
 

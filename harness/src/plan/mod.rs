@@ -20,9 +20,9 @@ use crate::error::Error;
 
 pub use estimate::estimate_seconds;
 
-/// Logical cores available to this process.
+/// Logical cores available to this process: what `threads = "all"` means here ([`Threads::cores_here`]).
 pub fn available_threads() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get())
+    Threads::cores_here()
 }
 
 /// One configuration: a series label and its settings (normalized, `threads` resolved).
@@ -313,6 +313,25 @@ mod tests {
         assert_eq!((all(&on2).settings.strategy().threads, all(&on16).settings.strategy().threads), (2, 16));
         assert_eq!(on2.configurations.len(), 2, "all and 2 stay two configurations on 2 cores");
         assert_ne!(on2.configurations[0].id, on2.configurations[1].id);
+    }
+
+    #[test]
+    fn threads_all_is_this_machines_cores_for_run_render_and_every_command() {
+        let text = format!("{BASE}[sweep]\nstrategy = [\"rayon-bands\", \"mpsc-threads\"]\nthreads = \"all\"\n");
+        let planned = Plan::new(&Experiment::parse(Path::new("t.toml"), &text).unwrap(), available_threads()).unwrap();
+        let cores = available_threads();
+        assert_eq!(cores, std::thread::available_parallelism().unwrap().get());
+        for c in &planned.configurations {
+            assert_eq!(c.settings.strategy().threads, cores, "run (and ab, reproduce, slurm, which plan): {}", c.id);
+        }
+        for strategy in ["rayon-bands", "mpsc-threads"] {
+            let set = [format!("strategy={strategy}"), "threads=all".to_string()];
+            let rendered = crate::render::settings_of(&set).unwrap();
+            assert_eq!(rendered.strategy().threads, cores, "render --set threads=all --set strategy={strategy}");
+        }
+        // Unresolved settings say the same as resolved ones.
+        let all = Settings { threads: Threads::All, ..planned.configurations[0].settings.clone() };
+        assert_eq!(all.strategy(), planned.configurations[0].settings.strategy());
     }
 
     #[test]

@@ -14,7 +14,7 @@ use tracer::rays::{RayAnswers, RaySet, trace};
 use tracer::render::RenderSettings;
 use tracer::scene::{MeshScene, Scene, SceneKind, random_triangles, tessellate};
 
-use crate::backend::workload::{bvhlab_phase_build, bvhlab_phase_trace};
+use crate::backend::workload::bvhlab_phase_trace;
 use crate::backend::{self, Geometry, Setup};
 use crate::error::Error;
 
@@ -139,20 +139,14 @@ pub struct Trial {
 }
 
 impl Trial {
-    /// Makes the scene and builds the structure, each timed. Builds run in the setup's pool.
+    /// Makes the scene and builds the structure, each timed ([`Setup::build`]).
     pub fn prepare(cx: &Context) -> Result<Trial, Error> {
         let t = Instant::now();
         let scene = make_scene(cx.settings, cx.file);
         let scene_s = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let backend = backend::of(cx.settings.accel);
-        let built = if backend.own_threads() {
-            backend.build(cx.settings, &scene.geometry(), cx.setup)? // on its own threads (Embree's TBB)
-        } else {
-            // The others build in the pool: the phase function runs there (installing from inside the pool again,
-            // as the backends' builds do, runs in place), where callgrind sees the building thread enter it.
-            cx.setup.install(|| bvhlab_phase_build(|| backend.build(cx.settings, &scene.geometry(), cx.setup)))?
-        };
+        let built = cx.setup.build(backend, cx.settings, &scene.geometry())?;
         let build_s = t.elapsed().as_secs_f64();
         Ok(Trial { scene, built, scene_s, build_s, output: None })
     }
@@ -387,7 +381,7 @@ pub fn counted(
 ) -> Result<(WorkCounters, u64, Option<RayAnswers>), Error> {
     let scene = make_scene(settings, file);
     let setup = Setup::start(settings)?;
-    let built = backend::of(settings.accel).build(settings, &scene.geometry(), &setup)?;
+    let built = setup.build(backend::of(settings.accel), settings, &scene.geometry())?;
     let (job, strategy) = (scene.job(settings, rays), settings.strategy());
     let (output, c) = setup.install(|| bvhlab_phase_trace(|| built.structure.run_counted(&job, &strategy)));
     let hash = output.hash();

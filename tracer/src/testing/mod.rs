@@ -8,7 +8,8 @@
 //! - [`scenes`]: the generated scenes, each with its [`scene_ray_mix`]; [`test_meshes`]: procedural triangle
 //!   meshes, each with its [`mesh_ray_mix`];
 //! - [`Reference`]: brute force's answers to a ray set, compared with an accelerator's under a
-//!   [`crate::agreement::Strictness`]; [`assert_every_tree_agrees`] checks every tree configuration at once.
+//!   [`crate::agreement::Strictness`]; [`assert_every_tree_agrees`] checks every tree configuration at once;
+//! - [`threads`]: where a strategy's worker threads may run (distinct CPUs, or all of them).
 //!
 //! Always compiled, at no cost to a release build: every function here is generic or `#[inline]`, so it is compiled
 //! only into the tests that call it.
@@ -16,6 +17,7 @@
 mod agree;
 mod meshes;
 mod rays;
+pub mod threads;
 
 pub use agree::{Comparison, Reference, Tally, assert_every_tree_agrees, assert_every_tree_agrees_on_triangles};
 pub use meshes::{TestMesh, mesh_ray_mix, test_meshes};
