@@ -73,7 +73,7 @@ pub fn summarise(rows: &Rows, spec: &ReportSpec) -> PolarsResult<DataFrame> {
 /// standard deviation (0 for one row), minimum and maximum.
 ///
 /// polars' eager group-by: its lazy engine would bring its streaming engine and cloud I/O (tokio, object_store,
-/// rustls, ...) into the build, about 90 s of compile on 2 cores for the same numbers (README, "Build time").
+/// rustls, ...) into the build, about 90 s of compile on 2 cores for the same numbers (docs/build.md, "Build time").
 #[allow(deprecated)] // the eager aggregates are deprecated in favour of the lazy ones
 fn aggregate(rows: &DataFrame) -> PolarsResult<DataFrame> {
     let groups = rows.group_by_stable([column::config_id, column::machine_id])?;

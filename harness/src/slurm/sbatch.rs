@@ -22,7 +22,7 @@ pub struct JobOptions {
     pub max_parallel: usize,
     /// Each task has its node to itself.
     pub exclusive: bool,
-    /// CPUs per task: the plan's largest thread count (`all` left to the node; see the README).
+    /// CPUs per task: the plan's largest thread count (`all` left to the node; see docs/clusters.md).
     pub cpus_per_task: usize,
     pub partition: Option<String>,
     pub constraint: Option<String>,

@@ -191,7 +191,7 @@ fn plan(chart: &Chart, overlay: &Overlay) -> Plan {
 }
 
 /// Encodes an RGB buffer with the tracer's PNG encoder (plotters' own encoder would bring in the `image`
-/// crate and a second `png` version: 8 s of a clean build's compile time, README "Build time").
+/// crate and a second `png` version: 8 s of a clean build's compile time, docs/build.md, "Build time").
 fn write_png(path: &Path, (width, height): (u32, u32), rgb: &[u8]) -> Result<(), Box<dyn std::error::Error>> {
     let pixels = rgb.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
     let file = std::io::BufWriter::new(std::fs::File::create(path)?);

@@ -58,7 +58,7 @@ impl Kernel {
     /// The smallest leaf block `auto` runs the AVX-512 kernel for: its 16-lane sphere test needs blocks of 16.
     /// With blocks of 4 or 8 it runs the AVX2 code compiled with AVX-512F enabled, measured 0-10% slower than
     /// the AVX2 kernel on single rays (AMD Zen 4 here, Zen 5 in issue #20); with blocks of 16, 5-15% faster
-    /// (`experiments/kernels.toml`, README "SIMD kernels").
+    /// (`experiments/kernels.toml`, docs/tracer.md, "SIMD kernels").
     pub const AVX512_FROM_BLOCK: u32 = 16;
 
     /// The kernel that runs for leaf blocks of `leaf_block` spheres: `auto` becomes AVX-512 for blocks of at least
