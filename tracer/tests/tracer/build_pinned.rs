@@ -7,7 +7,8 @@
 
 use glam::Vec3;
 use rayon::ThreadPoolBuilder;
-use tracer::accel::bvh::builder::{BuiltTree, build_in_blocks};
+use tracer::accel::bvh::builder::build_in_blocks;
+use tracer::accel::bvh::tree::BuiltTree;
 use tracer::accel::{BvhParams, Split};
 use tracer::fingerprint::Fnv64;
 use tracer::geometry::Sphere;

@@ -80,7 +80,7 @@ fn exponentially_spaced_spheres_stay_within_the_traversal_stack() {
                 ..AccelParams::default()
             };
             let depth = BuiltAccel::build(&spheres, &params).stats().depth;
-            assert!(depth < tracer::accel::bvh::builder::MAX_DEPTH, "{split:?}: depth {depth}");
+            assert!(depth < tracer::accel::bvh::tree::MAX_DEPTH, "{split:?}: depth {depth}");
         }
     }
     let rays: Vec<Ray> = (0..120).map(|i| Ray::new(Vec3::new(1.3f32.powi(i), 5.0, 0.0), -Vec3::Y)).collect();

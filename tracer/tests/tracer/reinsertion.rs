@@ -4,7 +4,8 @@
 //! thread count.
 
 use rayon::ThreadPoolBuilder;
-use tracer::accel::bvh::builder::{self, BuiltTree, MAX_DEPTH};
+use tracer::accel::bvh::builder;
+use tracer::accel::bvh::tree::{BuiltTree, MAX_DEPTH};
 use tracer::accel::{AccelKind, AccelParams, BuiltAccel, BvhParams, Split};
 use tracer::agreement::Strictness;
 use tracer::geometry::{Aabb, Primitive, Sphere, Triangle, TrianglePrimitive, WatertightTriangle};

@@ -5,8 +5,9 @@
 
 use glam::Vec3;
 use rayon::ThreadPoolBuilder;
-use tracer::accel::bvh::builder::{self, BuiltTree, FlatNode};
+use tracer::accel::bvh::builder;
 use tracer::accel::bvh::spatial::{self, DUPLICATE_BUDGET};
+use tracer::accel::bvh::tree::{BuiltTree, FlatNode};
 use tracer::accel::bvh::{SpatialAlpha, TreeStats};
 use tracer::accel::wide::{WideBvh, WideParams};
 use tracer::accel::{Accelerator, Bvh, BvhParams, FlatBvh, Split, Traversal};

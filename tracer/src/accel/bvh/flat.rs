@@ -1,10 +1,11 @@
 //! The tree in one contiguous array: 32-byte nodes, primitives copied into leaf order.
 
-use super::builder::{self, FlatNode};
+use super::builder;
 use super::params::{BvhParams, Traversal};
 use super::split::Referenced;
 use super::stats::TreeStats;
 use super::traverse::{self, ChildOrder, OrderedQueries, TreeView, traverse};
+use super::tree::FlatNode;
 use crate::accel::{Accelerator, Hit};
 use crate::counters::Counters;
 use crate::geometry::{Aabb, Ray, Sphere};

@@ -1,6 +1,7 @@
 //! Bounding volume hierarchies: one builder, two layouts, one generic traversal.
 //!
 //! - [`params`]: what a user chooses (leaf size, split rule, traversal order).
+//! - [`tree`]: what every builder produces (a [`tree::BuiltTree`] of [`tree::FlatNode`]s) and the depth bound.
 //! - [`builder`]: the shared top-down builder; [`split`] holds one file per split rule, [`sah`] the cost model;
 //!   [`spatial`]: the builder of [`Split::SpatialSah`] (object and spatial splits, references duplicated).
 //! - [`reinsertion`]: the optional post-build pass that moves subtrees to lower the tree's SAH cost.
@@ -18,6 +19,7 @@ pub mod spatial;
 pub mod split;
 pub mod stats;
 pub mod traverse;
+pub mod tree;
 
 pub use flat::FlatBvh;
 pub use params::{BvhParams, ParamError, SpatialAlpha, Split, Traversal};

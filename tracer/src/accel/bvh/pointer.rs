@@ -1,10 +1,11 @@
 //! The paper's tree: boxed nodes linked by pointers, leaves holding lists of primitive indices.
 
-use super::builder::{self, BuiltTree};
+use super::builder;
 use super::params::{BvhParams, Traversal};
 use super::split::Referenced;
 use super::stats::TreeStats;
 use super::traverse::{self, ChildOrder, OrderedQueries, TreeView, traverse};
+use super::tree::BuiltTree;
 use crate::accel::{Accelerator, Hit};
 use crate::counters::Counters;
 use crate::geometry::{Aabb, Ray, Sphere};

@@ -22,7 +22,7 @@
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
-use super::builder::{BuiltTree, FlatNode, MAX_DEPTH};
+use super::tree::{BuiltTree, FlatNode, MAX_DEPTH};
 use crate::geometry::Aabb;
 
 /// A round lowering the cost by less than this fraction of it ends the pass.

@@ -19,11 +19,11 @@
 
 use glam::Vec3A;
 
-use super::builder::{BuiltTree, FlatNode, MAX_DEPTH, PLACEHOLDER, ceil_log2};
 use super::params::BvhParams;
 use super::sah::CostModel;
 use super::split::clip::is_empty;
 use super::split::{Box3A, BuildRef, NodeView, Referenced, binned_sah};
+use super::tree::{BuiltTree, FlatNode, MAX_DEPTH, PLACEHOLDER, ceil_log2};
 use crate::geometry::Aabb;
 
 /// Most extra references a build makes, as a fraction of its primitives (Embree's and tinybvh's spatial builders

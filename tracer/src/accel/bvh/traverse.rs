@@ -2,8 +2,8 @@
 
 use std::mem::MaybeUninit;
 
-use super::builder::MAX_DEPTH;
 use super::params::Traversal;
+use super::tree::MAX_DEPTH;
 use crate::accel::Hit;
 use crate::counters::Counters;
 use crate::geometry::{Aabb, Ray, RayBoxTester};

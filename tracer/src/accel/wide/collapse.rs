@@ -22,7 +22,7 @@
 
 use super::leaf::{LeafBlock, WidePrimitive};
 use super::node::{ChildRef, WideNode};
-use crate::accel::bvh::builder::BuiltTree;
+use crate::accel::bvh::tree::BuiltTree;
 use crate::geometry::{Aabb, Sphere};
 use crate::parallel;
 

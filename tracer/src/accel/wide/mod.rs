@@ -4,9 +4,9 @@
 //! - [`params`]: width, leaf block, kernel, child order and any-hit order ([`WideParams`]);
 //! - [`node`]: the wide node (child boxes per axis, 64-byte aligned); [`leaf`]: the primitive blocks;
 //! - [`collapse`]: from the shared binary builder's tree (built with the SAH counting leaf blocks) to wide nodes;
-//! - [`ray`], [`order`], [`traverse`]: the traversal, generic over [`kernel`] (scalar, AVX2, AVX-512), child
-//!   order and counters; [`packet`]: packets of 8 or 16 rays with an active mask; [`tile`]: frustum-culled packets
-//!   of an 8×8 tile of camera rays.
+//! - [`ray`], [`order`], [`stack`], [`traverse`]: the traversal, generic over [`kernel`] (scalar, AVX2, AVX-512),
+//!   child order and counters; [`packet`]: packets of 8 or 16 rays with an active mask; [`tile`]: frustum-culled
+//!   packets of an 8×8 tile of camera rays.
 //!
 //! [`WideBvh`] holds one of six layouts (width × leaf block) and the kernel resolved at build time; each query
 //! dispatches once (layout, order, kernel) into a traversal compiled for exactly that combination.
@@ -19,6 +19,7 @@ pub mod order;
 pub mod packet;
 pub mod params;
 pub mod ray;
+pub mod stack;
 pub mod tile;
 pub mod traverse;
 

@@ -1,7 +1,7 @@
 //! Child orders: which of a node's hit children is visited first (the others wait on the stack).
 
-use super::node::{ChildRef, WideNode};
-use super::traverse::Stack;
+use super::node::WideNode;
+use super::stack::Stack;
 
 /// Pushes a node's hit children so that the one to visit first is on top (and the last one deepest).
 pub trait Order {
@@ -54,6 +54,3 @@ impl Order for ByOctant {
         }
     }
 }
-
-/// `ChildRef` is what the stack holds with each distance.
-pub type Entry = (ChildRef, f32);

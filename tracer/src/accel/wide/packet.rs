@@ -28,7 +28,7 @@ use super::node::{ChildRef, WideNode};
 use super::order::Order;
 use super::ray::RayLanes;
 use crate::accel::Hit;
-use crate::accel::bvh::builder::MAX_DEPTH;
+use crate::accel::bvh::tree::MAX_DEPTH;
 use crate::counters::Counters;
 use crate::geometry::Ray;
 use crate::render::PrimaryHits;
@@ -37,7 +37,7 @@ use crate::render::PrimaryHits;
 /// round past a sphere's hit distance, far below what would make a visit useless.
 pub(super) const CULL_SLACK: f32 = 1.0 + 1.0 / 65536.0;
 
-/// Stack entries: as for one ray (see `traverse`), every level leaves at most `W - 1` entries.
+/// Stack entries: as for one ray (see `stack`), every level leaves at most `W - 1` entries.
 const STACK: usize = MAX_DEPTH * 8;
 
 /// A child waiting, the rays that entered it, and the nearest of their entry distances.

@@ -9,85 +9,17 @@
 //! per real sphere of every block tested (not padding lanes). They depend only on the tree and the ray, not on
 //! the kernel, since every kernel computes the same distances.
 
-use std::mem::MaybeUninit;
-
 use super::collapse::Tree;
 use super::kernel::{Ops, Query};
 use super::leaf::{LeafBlock, PAD, WidePrimitive};
 use super::node::ChildRef;
-use super::order::{Entry, Order};
+use super::order::Order;
 use super::ray::RayLanes;
+use super::stack::Stack;
 use crate::accel::Hit;
-use crate::accel::bvh::builder::MAX_DEPTH;
 use crate::counters::Counters;
 use crate::geometry::Ray;
 use crate::render::PrimaryHits;
-
-/// Stack entries: a tree is at most [`MAX_DEPTH`] wide levels deep (it has no more levels than the binary tree),
-/// each level leaves at most 7 entries, and a node pushes at most 8 before one is popped.
-const STACK: usize = MAX_DEPTH * 8;
-
-/// The traversal stack: children waiting with their entry distances.
-pub struct Stack {
-    entries: [MaybeUninit<Entry>; STACK],
-    len: usize,
-}
-
-impl Stack {
-    #[inline(always)]
-    fn new() -> Self {
-        Self { entries: [const { MaybeUninit::uninit() }; STACK], len: 0 }
-    }
-
-    /// Entries held.
-    #[inline(always)]
-    pub fn len(&self) -> usize {
-        self.len
-    }
-
-    /// True when no entry is held.
-    #[inline(always)]
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
-    }
-
-    /// Pushes an entry on top.
-    #[inline(always)]
-    pub fn push(&mut self, child: ChildRef, t: f32) {
-        debug_assert!(self.len < STACK);
-        // SAFETY: see `STACK`: a traversal never holds more entries.
-        unsafe { self.entries.get_unchecked_mut(self.len) }.write((child, t));
-        self.len += 1;
-    }
-
-    /// Inserts an entry among those from `base` up, kept with the largest distance lowest (equal ones above it).
-    #[inline(always)]
-    pub fn insert_sorted(&mut self, base: usize, child: ChildRef, t: f32) {
-        debug_assert!(self.len < STACK && base <= self.len);
-        let mut i = self.len;
-        // SAFETY: entries below `len` are written; `i < STACK` as in `push`.
-        unsafe {
-            while i > base && self.entries.get_unchecked(i - 1).assume_init_ref().1 <= t {
-                let below = self.entries.get_unchecked(i - 1).assume_init_read();
-                self.entries.get_unchecked_mut(i).write(below);
-                i -= 1;
-            }
-            self.entries.get_unchecked_mut(i).write((child, t));
-        }
-        self.len += 1;
-    }
-
-    /// Pops the top entry.
-    #[inline(always)]
-    fn pop(&mut self) -> Option<Entry> {
-        if self.len == 0 {
-            return None;
-        }
-        self.len -= 1;
-        // SAFETY: entries below the old `len` are written, and each is read once.
-        Some(unsafe { self.entries.get_unchecked(self.len).assume_init_read() })
-    }
-}
 
 /// Where the traversal goes next: into `ChildRef`, or back to the stack.
 #[inline(always)]
