@@ -45,14 +45,19 @@ impl Run {
 
     /// True when the run's setting columns take one of the allowed values for every filter entry
     /// (`threads = "all"` also matches rows recorded before `all` stayed symbolic, whose `threads` holds the
-    /// logical cores of the machine that recorded them).
+    /// logical cores of the machine that recorded them). A `threads` entry passes serial runs, to which thread
+    /// counts do not apply: "rayon bands on all cores against serial" keeps its serial side.
     pub fn passes(&self, filter: &[(String, Vec<String>)]) -> bool {
+        let threads = schema::Axis::threads.key();
         let threads_all = |column: &str, a: &str| {
-            column == schema::Axis::threads.key()
+            column == threads
                 && schema::Threads::from_word(a)
                     .is_some_and(|t| f64::from(t.resolve(self.row.logical_cores as usize)) == self.num(column))
         };
-        filter.iter().all(|(column, allowed)| allowed.iter().any(|a| a == self.text(column) || threads_all(column, a)))
+        let serial = self.text(schema::Axis::strategy.key()) == tracer::executor::StrategyKind::Serial.name();
+        filter.iter().all(|(column, allowed)| {
+            (column == threads && serial) || allowed.iter().any(|a| a == self.text(column) || threads_all(column, a))
+        })
     }
 
     /// A column's value as text (`""` for a column the schema does not declare).

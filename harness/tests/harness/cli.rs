@@ -660,6 +660,61 @@ fn check_claims_exits_1_when_a_claim_fails() {
 }
 
 #[test]
+fn report_claims_against_fails_naming_a_claim_that_held_there_and_fails_here_everywhere() {
+    let (list, flat, ..) = names();
+    let dir = temp("claims-against");
+    let claim = "[[claim]]\ntext = \"the tree is faster than brute force\"\nkind = \"faster\"\nseries = \"tree\"\n\
+                 than = \"brute\"\nfactor = 1.0\n";
+    // The same claim over the same settings, recorded once with the BVH as `tree` and once with the list.
+    let record = |name: &str, tree: &str, brute: &str| {
+        let cfg = dir.join(format!("{name}.toml"));
+        std::fs::write(
+            &cfg,
+            format!("name = \"c\"\nrepetitions = 6\n[sweep]\nobjects = 2000\nwidth = 48\nheight = 32\nworkload = \"primary\"\n\
+                 [[series]]\nlabel = \"brute\"\naccel = \"{brute}\"\n[[series]]\nlabel = \"tree\"\naccel = \"{tree}\"\n{claim}"),
+        )
+        .unwrap();
+        let out = dir.join(name);
+        let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        out
+    };
+    let (held, lost) = (record("held", flat, list), record("lost", list, flat));
+    let against = |dir: &Path, recorded: &Path| {
+        harness()
+            .args(["report", dir.to_str().unwrap(), "--claims-against", recorded.to_str().unwrap()])
+            .output()
+            .unwrap()
+    };
+    let o = against(&lost, &held);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("claim lost: \"the tree is faster than brute force\""), "{}", stderr(&o));
+    let o = against(&held, &lost);
+    assert!(o.status.success(), "a claim that failed there and holds here is no loss: {}", stderr(&o));
+    let o = against(&held, &dir.join("nothing"));
+    assert_eq!(o.status.code(), Some(2), "not a run folder: {}", stderr(&o));
+}
+
+#[test]
+fn a_claim_at_all_cores_keeps_its_serial_side() {
+    let dir = temp("claim-serial");
+    let cfg = dir.join("threads.toml");
+    std::fs::write(
+        &cfg,
+        "name = \"t\"\nrepetitions = 6\n[sweep]\nobjects = 200\nwidth = 48\nheight = 32\nworkload = \"primary\"\n\
+         threads = [1, 2]\n[[series]]\nlabel = \"serial\"\nstrategy = \"serial\"\n[[series]]\nlabel = \"rayon\"\n\
+         strategy = \"rayon-bands\"\n[[claim]]\ntext = \"rayon on all cores is not 100x slower\"\nkind = \"faster\"\n\
+         series = \"rayon\"\nthan = \"serial\"\nfactor = 0.01\nwhere = { threads = \"all\" }\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let printed = String::from_utf8_lossy(&o.stdout);
+    assert!(printed.contains("claim holds") && printed.contains("rayon on all cores"), "{printed}");
+}
+
+#[test]
 fn a_missing_embree_is_reported_skipped_or_refused() {
     let (_, flat, embree, _) = names();
     let dir = temp("noembree");
