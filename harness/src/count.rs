@@ -31,11 +31,11 @@ use crate::backend;
 use crate::config::Experiment;
 use crate::error::Error;
 use crate::plan::{self, Configuration, Plan};
-use crate::run::measure::Timing;
 use crate::run::provenance::Provenance;
+use crate::run::trial::Timing;
 use crate::run::{CONFIG_COPY, worker_request};
 
-/// The phases counted, with the name of the function each runs in (`run::measure`).
+/// The phases counted, with the name of the function each runs in (`run::trial`).
 const PHASES: [(&str, &str); 2] = [("build", "bvhlab_phase_build"), ("trace", "bvhlab_phase_trace")];
 
 /// The simulated caches of `--cache-sim` (size, associativity, line), fixed so the misses do not depend on the

@@ -4,7 +4,7 @@
 //! The estimate weighs every run by its configuration's cost: the cost model's seconds before a configuration
 //! ran ([`crate::plan::estimate_seconds`], scaled by how far off the model was on the runs so far), then the
 //! mean wall time of its own runs. The runs still expected come from the sweep (with `repetitions = "auto"`
-//! an expectation, see `run::adaptive`).
+//! an expectation, see `run::stopping`).
 
 use std::io::{IsTerminal, Write};
 use std::time::{Duration, Instant};

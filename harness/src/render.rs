@@ -17,7 +17,7 @@ use crate::backend::workload::bvhlab_phase_trace;
 use crate::backend::{self, Setup};
 use crate::cli::RenderArgs;
 use crate::error::Error;
-use crate::run::measure::{SceneData, make_scene};
+use crate::run::scenes::{SceneData, make_scene};
 
 /// A `--set` value as a config value: an integer, else a number, else text.
 fn raw(text: &str) -> Raw<'_> {

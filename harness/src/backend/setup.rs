@@ -70,7 +70,7 @@ mod tests {
 
     use super::*;
     use crate::render::settings_of;
-    use crate::run::measure::make_scene;
+    use crate::run::scenes::make_scene;
 
     fn settings(set: &[&str]) -> Settings {
         settings_of(&set.iter().map(|s| s.to_string()).collect::<Vec<_>>()).unwrap()

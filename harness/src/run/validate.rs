@@ -1,87 +1,88 @@
-//! Validation before timing: what is the harness's business around the tracer's one definition of agreement
-//! ([`tracer::agreement`]: the distance tolerance and f64 brute force's arbitration): choosing the reference,
-//! the sampling budgets, and counting the outcomes into a row.
-//!
-//! The reference is f32 brute force ([`List`]) for scenes of at most [`BRUTE_FORCE_MAX`] primitives, else the
-//! tracer's flat BVH (binned SAH, front-to-back); over triangles both run the watertight test, and f64 brute force
-//! is over the [`Triangle`]s (a ray within rounding of a shared edge or vertex is a tie there: tolerated, counted
-//! as `grazing`). Neither is trusted blindly: before its first use, the
-//! reference's answers are checked against f64 brute force on every ray when rays × spheres ≤
-//! [`ARBITRATION_BUDGET`], else on at least [`SAMPLE_MIN`] rays evenly strided over the set ([`sample`]); the
-//! count is recorded as `reference_checked`, and an answer f64 does not accept fails every configuration
-//! validated against that reference (`wrong_side = reference`).
+//! Validation before timing, planned → validated or rejected: one counted pass of a configuration, and its answers
+//! judged against the reference's ([`super::reference`]) by the tracer's one definition of agreement
+//! ([`tracer::agreement`]: the distance tolerance and f64 brute force's arbitration), counted into a row.
 //!
 //! A backend's answer that does not agree with the reference's ([`Answer::agrees`]) is arbitrated
 //! ([`arbitrate`]): a tolerated disagreement counts as `grazing`; a mismatch counts in `mismatches`, and
 //! `wrong_side` says whose answers f64 showed wrong (`backend`, `reference` or `both`). Validation passes
-//! (`exact`) when `mismatches` is 0. More disagreements than one sample's worth are arbitrated on an evenly
-//! strided sample of that size; the rest count as mismatches.
+//! (`exact`) when `mismatches` is 0. More disagreements than one strided subset's worth are arbitrated on an
+//! evenly strided subset of that size; the rest count as mismatches.
 
-use std::collections::HashMap;
-use std::sync::Arc;
+use schema::{ValidationStatus, WrongSide};
+use tracer::agreement::{self, Answer, Outcome, Strictness, Tolerated, arbitrate};
+use tracer::counters::WorkCounters;
+use tracer::rays::{RayAnswers, RaySet};
 
-use schema::{SceneName, Settings, WrongSide};
-use tracer::accel::{AccelKind, BvhParams, FlatBvh, List, Split, Traversal};
-use tracer::agreement::RayCandidates;
-use tracer::agreement::{self, Answer, BruteForce64, Outcome, Strictness, Tolerated, arbitrate};
-use tracer::counters::NoCounters;
-use tracer::executor::Strategy;
-use tracer::geometry::{Ray, Sphere, Triangle, TrianglePrimitive, WatertightTriangle};
-use tracer::rays::{RayAnswers, RayKind, RaySet, trace};
-use tracer::scene::Scene;
+use super::rays::{RayBank, workload_rays};
+use super::reference::{Reference, checked_count, strided};
+use super::trial::counted;
+use crate::error::Error;
+use crate::plan::{Configuration, Plan};
 
-use super::measure::{SceneData, make_scene};
-
-/// f64 brute force over a scene's primitives.
-#[derive(Debug)]
-pub enum Exact {
-    Spheres(BruteForce64<Sphere>),
-    Triangles(BruteForce64<Triangle>),
+/// What validating one configuration found: the counted pass's counters and output hash, and the judgement of its
+/// answers against the reference's (no reference and no judgement for a backend that gives no answers).
+#[derive(Clone, Debug)]
+pub struct Findings {
+    pub status: ValidationStatus,
+    pub counters: WorkCounters,
+    pub output_hash: u64,
+    pub reference: &'static str,
+    /// Mismatches, tolerated disagreements by kind, the reference's own check and whose answers were wrong.
+    pub judged: Judgement,
+    pub rays: usize,
 }
 
-impl Exact {
-    /// f64 brute force over the scene's primitives.
-    pub fn of(scene: &SceneData) -> Self {
-        match scene {
-            SceneData::Spheres(s) => Exact::Spheres(BruteForce64::new(&s.spheres)),
-            SceneData::Triangles(t) => Exact::Triangles(BruteForce64::new(&t.mesh.triangles().collect::<Vec<_>>())),
-        }
-    }
+/// A planned configuration after validation: cleared for timing, or rejected (recorded once, never timed).
+#[derive(Clone, Debug)]
+pub enum Validation {
+    /// Its answers agree with the reference's (`exact`), or its backend gives none to check (`unchecked`).
+    Validated(Findings),
+    /// Its answers disagree with the reference's beyond f64 brute force's tolerance.
+    Rejected(Findings),
+}
 
-    /// True for a scene of nothing.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Number of primitives.
-    pub fn len(&self) -> usize {
-        match self {
-            Exact::Spheres(b) => b.len(),
-            Exact::Triangles(b) => b.len(),
-        }
-    }
-
-    /// Every primitive each ray meets, in f64.
-    pub fn candidates(&self, rays: &[Ray]) -> Vec<RayCandidates> {
-        match self {
-            Exact::Spheres(b) => b.candidates(rays),
-            Exact::Triangles(b) => b.candidates(rays),
-        }
+impl Findings {
+    /// Why a configuration (`what`) was rejected, in one line.
+    pub fn failure(&self, what: &str) -> String {
+        format!(
+            "VALIDATION FAILED: {what}: {} of {} rays disagree with {} beyond f64 brute force's tolerance ({} grazing, \
+             {} ties, {} leaks tolerated); f64 shows the {} answers wrong; this configuration is not timed",
+            self.judged.mismatches,
+            self.rays,
+            self.reference,
+            self.judged.grazing,
+            self.judged.ties,
+            self.judged.leaks,
+            match self.judged.wrong_side {
+                WrongSide::Both => "backend's and the reference's",
+                WrongSide::Reference => "reference's",
+                WrongSide::Backend | WrongSide::Neither => "backend's",
+            }
+        )
     }
 }
 
-/// Largest scene validated against brute force.
-pub const BRUTE_FORCE_MAX: usize = 10_000;
-
-/// Rays × spheres up to which f64 brute force checks every ray of a set (about 2 s on one core).
-pub const ARBITRATION_BUDGET: u64 = 2_000_000_000;
-
-/// Fewest rays f64 brute force checks (or arbitrates) in a set, when not all of them.
-pub const SAMPLE_MIN: usize = 16_384;
-
-/// The trusted tree for larger scenes.
-pub(crate) fn reference_params() -> BvhParams {
-    BvhParams { split: Split::BinnedSah, traversal: Traversal::FrontToBack, ..BvhParams::default() }
+/// Validates configuration `c` before its first timed run: one counted pass over its workload's rays (its counters
+/// and output hash), and its answers to its validation ray set judged against the reference's (a backend that gives
+/// no answers is recorded `unchecked`).
+pub fn validate(plan: &Plan, c: &Configuration, bank: &mut RayBank) -> Result<Validation, Error> {
+    let (settings, file) = (&c.settings, plan.scene_file());
+    let rays = workload_rays(plan, settings, bank);
+    let rays = rays.as_deref();
+    let reference = bank.reference_for(settings, file);
+    let Some(reference) = reference else {
+        let (counters, output_hash, _) = counted(settings, file, rays, None)?;
+        let judged = Judgement::default();
+        let status = ValidationStatus::Unchecked;
+        return Ok(Validation::Validated(Findings { status, counters, output_hash, reference: "-", judged, rays: 0 }));
+    };
+    let (counters, output_hash, answers) = counted(settings, file, rays, Some(&reference.set))?;
+    let judged = judge(&reference, &answers.expect("answers were asked for"));
+    let exact = judged.mismatches == 0;
+    let status = if exact { ValidationStatus::Exact } else { ValidationStatus::Failed };
+    let findings =
+        Findings { status, counters, output_hash, reference: reference.name, judged, rays: reference.set.rays.len() };
+    Ok(if exact { Validation::Validated(findings) } else { Validation::Rejected(findings) })
 }
 
 /// Indices of the rays of `set` whose answers disagree or name different primitives (`None` when the answers
@@ -100,55 +101,6 @@ pub fn disagreements(set: &RaySet, reference: &RayAnswers, got: &RayAnswers) -> 
             })
             .collect()
     })
-}
-
-/// How many of `rays` rays f64 brute force over `spheres` spheres checks: all within [`ARBITRATION_BUDGET`],
-/// else `max(SAMPLE_MIN, budget / spheres)`.
-pub fn sample_size(rays: usize, spheres: usize) -> usize {
-    if rays as u64 * spheres as u64 <= ARBITRATION_BUDGET {
-        rays
-    } else {
-        SAMPLE_MIN.max((ARBITRATION_BUDGET / spheres.max(1) as u64) as usize).min(rays)
-    }
-}
-
-/// `k` of the indices `0..n`, evenly strided (all of them when `k ≥ n`).
-pub fn sample(n: usize, k: usize) -> Vec<usize> {
-    let k = k.min(n);
-    (0..k).map(|i| (i as u128 * n as u128 / k as u128) as usize).collect()
-}
-
-/// A ray set, the reference's answers, and what f64 brute force found of them.
-#[derive(Debug)]
-pub struct Reference {
-    /// The rays.
-    pub set: Arc<RaySet>,
-    /// The reference's answers.
-    pub answers: Arc<RayAnswers>,
-    /// The reference's name (`list` or `flat-bvh`).
-    pub name: &'static str,
-    /// The scene's primitives, for f64 brute force.
-    pub exact: Arc<Exact>,
-    /// Rays whose reference answer f64 brute force checked.
-    pub checked: usize,
-    /// Those of them it did not accept.
-    pub wrong: Vec<usize>,
-}
-
-impl Reference {
-    /// Checks `answers` against f64 brute force on [`sample_size`] rays of `set`.
-    pub fn check(set: Arc<RaySet>, answers: Arc<RayAnswers>, name: &'static str, exact: Arc<Exact>) -> Self {
-        let picked = sample(set.rays.len(), sample_size(set.rays.len(), exact.len()));
-        let rays: Vec<Ray> = picked.iter().map(|&i| set.rays[i]).collect();
-        let found = exact.candidates(&rays);
-        let wrong = picked
-            .iter()
-            .zip(&found)
-            .filter(|(i, c)| !c.verdict(&Answer::of(&answers, **i)).acceptable())
-            .map(|(i, _)| *i)
-            .collect();
-        Self { set, answers, name, exact, checked: picked.len(), wrong }
-    }
 }
 
 /// What validation found: disagreements with the reference that f64 brute force did not accept
@@ -177,9 +129,9 @@ pub fn judge(reference: &Reference, got: &RayAnswers) -> Judgement {
             ..Judgement::default()
         };
     };
-    let cap = sample_size(n, reference.exact.len());
+    let cap = checked_count(n, reference.exact.len());
     let (mut rays, unjudged) = if disagree.len() > cap {
-        (sample(disagree.len(), cap).into_iter().map(|k| disagree[k]).collect(), disagree.len() - cap)
+        (strided(disagree.len(), cap).into_iter().map(|k| disagree[k]).collect(), disagree.len() - cap)
     } else {
         (disagree.clone(), 0)
     };
@@ -206,100 +158,21 @@ pub fn judge(reference: &Reference, got: &RayAnswers) -> Judgement {
     judged
 }
 
-/// A scene's identity for caching: scene source, objects, seed and image size.
-type SceneKey = (String, u64, u64, u32, u32);
-
-/// A ray set with its reference answers and the reference's name.
-type Entry = (Arc<RaySet>, Arc<RayAnswers>, &'static str);
-
-/// Ray sets and reference answers, generated once per scene and ray kind; the reference's check against f64
-/// brute force, made once per scene and ray kind when first asked for.
-#[derive(Default)]
-pub struct RayBank {
-    sets: HashMap<(SceneKey, RayKind), Entry>,
-    exact: HashMap<SceneKey, Arc<Exact>>,
-    checked: HashMap<(SceneKey, RayKind), Arc<Reference>>,
-}
-
-impl RayBank {
-    fn key(s: &Settings, file: Option<&Scene>) -> SceneKey {
-        let source = match (s.scene, file) {
-            (SceneName::SphereFile, Some(scene)) => format!("file:{:016x}", scene.fingerprint()),
-            (SceneName::Mesh, _) => format!("mesh:{}", s.mesh.as_ref().map_or("-", |m| m.0.as_str())),
-            (scene, _) => schema::Named::name(scene).to_string(),
-        };
-        let view = s.view.map_or("-", |v| v.name());
-        (format!("{source} {view}"), s.objects, s.seed, s.width, s.height)
-    }
-
-    /// The ray set of kind `kind` for the scene of `s`, its reference answers and the reference's name.
-    pub fn get(&mut self, s: &Settings, file: Option<&Scene>, kind: RayKind) -> Entry {
-        let key = Self::key(s, file);
-        if let Some(entry) = self.sets.get(&(key.clone(), kind)) {
-            return entry.clone();
-        }
-        let scene = make_scene(s, file);
-        let (set, answers, name) = match &scene {
-            SceneData::Spheres(sc) => reference_answers(&sc.spheres, generate(kind, &scene, s.seed)),
-            SceneData::Triangles(t) => {
-                reference_answers(&WatertightTriangle::all(t.mesh.triangles()), generate(kind, &scene, s.seed))
-            }
-        };
-        self.exact.entry(key.clone()).or_insert_with(|| Arc::new(Exact::of(&scene)));
-        let entry = (Arc::new(set), Arc::new(answers), name);
-        self.sets.insert((key, kind), entry.clone());
-        entry
-    }
-
-    /// [`RayBank::get`]'s set and answers with the reference's check against f64 brute force.
-    pub fn reference(&mut self, s: &Settings, file: Option<&Scene>, kind: RayKind) -> Arc<Reference> {
-        let key = (Self::key(s, file), kind);
-        if let Some(checked) = self.checked.get(&key) {
-            return checked.clone();
-        }
-        let (set, answers, name) = self.get(s, file, kind);
-        let reference = Arc::new(Reference::check(set, answers, name, self.exact[&key.0].clone()));
-        self.checked.insert(key, reference.clone());
-        reference
-    }
-}
-
-/// The reference's answers to `set` over `prims`: f32 brute force up to [`BRUTE_FORCE_MAX`], else the flat BVH.
-fn reference_answers<P: tracer::accel::bvh::split::Referenced>(
-    prims: &[P],
-    set: RaySet,
-) -> (RaySet, RayAnswers, &'static str) {
-    if prims.len() <= BRUTE_FORCE_MAX {
-        let answers = trace::<_, NoCounters>(&List::build(prims), &set, &Strategy::SERIAL).0;
-        (set, answers, AccelKind::List.name())
-    } else {
-        let answers = trace::<_, NoCounters>(&FlatBvh::build(prims, &reference_params()), &set, &Strategy::SERIAL).0;
-        (set, answers, AccelKind::FlatBvh.name())
-    }
-}
-
-/// The ray set of `kind` for `scene`; secondary rays start from primary hits found with a fast tracer tree
-/// (every tree gives the same hits; over triangles the watertight test's), diffuse and ambient-occlusion
-/// directions drawn from the scene seed.
-pub fn generate(kind: RayKind, scene: &SceneData, seed: u64) -> RaySet {
-    let params = BvhParams { traversal: Traversal::FrontToBack, ..BvhParams::default() };
-    match scene {
-        SceneData::Spheres(scene) => {
-            RaySet::generate(kind, scene, &FlatBvh::build(&scene.spheres, &params), seed ^ 0xd1ff_u64)
-        }
-        SceneData::Triangles(t) => {
-            let prims = WatertightTriangle::all(t.mesh.triangles());
-            let fast = FlatBvh::build(&prims, &params);
-            RaySet::generate_over(kind, &t.camera, t.light, &prims, &fast, seed ^ 0xd1ff_u64)
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
+    use tracer::accel::List;
+    use tracer::counters::NoCounters;
+    use tracer::executor::Strategy;
+    use tracer::rays::{RayKind, trace};
+
+    use std::sync::Arc;
+
+    use super::super::reference::Exact;
     use super::*;
     use tracer::Vec3;
     use tracer::accel::Hit;
+    use tracer::agreement::BruteForce64;
+    use tracer::geometry::{Ray, Sphere, Triangle};
     use tracer::render::PrimaryHits;
 
     fn set(rays: Vec<Ray>) -> RaySet {
@@ -323,16 +196,6 @@ mod tests {
             Some(vec![1, 3])
         );
         assert_eq!(disagreements(&rays, &flags(&[true]), &want), None);
-    }
-
-    #[test]
-    fn samples_are_all_rays_within_the_budget_else_strided() {
-        assert_eq!(sample_size(49_152, 10_000), 49_152);
-        assert_eq!(sample_size(786_432, 10_000), 200_000);
-        assert_eq!(sample_size(786_432, 1_000_000), SAMPLE_MIN);
-        assert_eq!(sample_size(100, 1_000_000), 100);
-        assert_eq!(sample(10, 4), vec![0, 2, 5, 7]);
-        assert_eq!(sample(3, 8), vec![0, 1, 2]);
     }
 
     /// One sphere; ray 0 hits it squarely, ray 1 exactly tangent (f32 brute force hits it), ray 2 misses it by

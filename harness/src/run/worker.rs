@@ -16,10 +16,11 @@ use schema::Settings;
 use serde::{Deserialize, Serialize};
 use tracer::rays::RaySet;
 
-use super::measure::{self, Timing};
+use super::scenes::make_scene;
+use super::trial::{self, Timing};
 use crate::backend::Setup;
 use crate::error::Error;
-use crate::plan::SphereFile;
+use crate::plan::{Configuration, Plan, SphereFile};
 
 /// What a worker is asked to time.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -40,7 +41,7 @@ pub struct WorkerRequest {
     pub step: Step,
 }
 
-/// A part of a timed run, for runs whose passes take turns with other configurations' ([`measure::sample`]).
+/// A part of a timed run, for runs whose passes take turns with other configurations' ([`trial::sample`]).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Step {
@@ -58,6 +59,17 @@ pub enum Step {
 impl Step {
     fn is_whole(&self) -> bool {
         *self == Step::Whole
+    }
+}
+
+/// The worker request of a configuration.
+pub fn worker_request(plan: &Plan, c: &Configuration) -> WorkerRequest {
+    WorkerRequest {
+        settings: c.settings.clone(),
+        sphere_file: plan.sphere_file.as_ref().map(|f| f.path.clone()),
+        sample_s: plan.sample_s,
+        rays_file: None,
+        step: Step::Whole,
     }
 }
 
@@ -83,7 +95,7 @@ struct Session {
     file: Option<SphereFile>,
     rays: Option<RaySet>,
     /// The run under way, between its `Prepare` and its `Finish`.
-    trial: Option<measure::Trial>,
+    trial: Option<trial::Trial>,
 }
 
 impl Session {
@@ -97,9 +109,7 @@ impl Session {
         let scene = file.as_ref().map(|f| &*f.scene);
         let rays = match (s.workload, &request.rays_file) {
             (schema::Workload::Rays(k), Some(path)) => Some(read_rays(path, k)?),
-            (schema::Workload::Rays(k), None) => {
-                Some(super::validate::generate(k, &measure::make_scene(s, scene), s.seed))
-            }
+            (schema::Workload::Rays(k), None) => Some(super::rays::generate(k, &make_scene(s, scene), s.seed)),
             (schema::Workload::Render, _) => None,
         };
         Ok(Session { request: request.clone(), setup, file, rays, trial: None })
@@ -112,7 +122,7 @@ impl Session {
 
     /// Answers `step` of a run with samples of `sample_s`: the JSON of what it gives.
     fn answer(&mut self, step: Step, sample_s: f64) -> Result<String, Error> {
-        let cx = measure::Context {
+        let cx = trial::Context {
             settings: &self.request.settings,
             file: self.file.as_ref().map(|f| &*f.scene),
             rays: self.rays.as_ref(),
@@ -121,11 +131,11 @@ impl Session {
         let out_of_order = || Error::Input("stdin: a pass or finish request before its prepare".into());
         Ok(match step {
             Step::Whole => {
-                let timing = measure::timed(cx.settings, cx.file, cx.rays, cx.setup, sample_s)?;
+                let timing = trial::timed(cx.settings, cx.file, cx.rays, cx.setup, sample_s)?;
                 serde_json::to_string(&timing).expect("timings serialize")
             }
             Step::Prepare => {
-                self.trial = Some(measure::Trial::prepare(&cx)?);
+                self.trial = Some(trial::Trial::prepare(&cx)?);
                 "null".into()
             }
             Step::Pass => self.trial.as_mut().ok_or_else(out_of_order)?.pass(&cx).to_string(),
@@ -371,7 +381,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("bvhlab-worker-rays-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let (rays, wrong) = (dir.join("diffuse.bin"), dir.join("primary.bin"));
-        let made = |kind| super::super::validate::generate(kind, &measure::make_scene(&s, None), s.seed).to_bytes();
+        let made = |kind| super::super::rays::generate(kind, &make_scene(&s, None), s.seed).to_bytes();
         std::fs::write(&rays, made(tracer::rays::RayKind::Diffuse)).unwrap();
         std::fs::write(&wrong, made(tracer::rays::RayKind::Primary)).unwrap();
         let own =

@@ -13,8 +13,14 @@ use std::collections::HashMap;
 
 use report::stats;
 
-use super::measure::Timing;
-use crate::config::Repetitions;
+use super::trial::Timing;
+use crate::config::{Experiment, Repetitions};
+use crate::plan::Configuration;
+
+/// The metric whose interval decides `c`'s repetitions: the experiment's speedup metric for its workload.
+pub fn metric<'a>(exp: &'a Experiment, c: &Configuration) -> &'a str {
+    report::spec::speedup_metric(exp.speedup_metric.as_deref(), schema::Named::name(c.settings.workload))
+}
 
 /// The phase whose samples decide for `metric`: the phase itself, `trace_s` for `mrays_per_s` (the same relative
 /// interval); `None` for a counter, which is the same in every repetition.
@@ -50,7 +56,7 @@ pub fn interval_width(samples: &[f64]) -> Option<f64> {
 }
 
 /// Each configuration's samples so far, and whether it is done.
-pub struct Sampler {
+pub struct Stopping {
     rule: Repetitions,
     /// Each configuration's reference (the reference series' configuration at its point), when its rounds pair
     /// with it: the configuration is then decided by the interval of its per-round ratios to the reference.
@@ -65,8 +71,8 @@ pub struct Sampler {
     went_on: usize,
 }
 
-impl Sampler {
-    /// No samples yet; `reference[c]` is configuration `c`'s paired reference, if any (see [`Sampler::paired`]).
+impl Stopping {
+    /// No samples yet; `reference[c]` is configuration `c`'s paired reference, if any (see [`Stopping::paired`]).
     pub fn new(rule: Repetitions, reference: Vec<Option<usize>>) -> Self {
         let mut partners: HashMap<usize, Vec<usize>> = HashMap::new();
         for (c, r) in reference.iter().enumerate() {
@@ -78,7 +84,7 @@ impl Sampler {
         Self { rule, reference, partners, samples, deterministic, reached_min: 0, went_on: 0 }
     }
 
-    /// Each configuration's reference for [`Sampler::new`]: with interleaved rounds, the one configuration of the
+    /// Each configuration's reference for [`Stopping::new`]: with interleaved rounds, the one configuration of the
     /// `reference` series at the same point (`points[c]`, `series[c]`), none for the reference itself or where
     /// the point has not exactly one.
     pub fn paired(points: &[usize], series: &[&str], reference: Option<&str>) -> Vec<Option<usize>> {
@@ -168,7 +174,7 @@ mod tests {
 
     #[test]
     fn quiet_samples_stop_at_the_minimum() {
-        let mut s = Sampler::new(AUTO, vec![None, None]);
+        let mut s = Stopping::new(AUTO, vec![None, None]);
         for (i, x) in [1.000, 1.001, 0.999, 1.0005, 0.9995, 1.0].into_iter().enumerate() {
             assert!(!s.is_done(0), "done after {i}");
             s.record(0, Some(x));
@@ -179,7 +185,7 @@ mod tests {
 
     #[test]
     fn no_configuration_stops_before_its_median_has_an_interval() {
-        let mut s = Sampler::new(Repetitions::Auto { min: 3, max: 20, target_width: 0.05 }, vec![None]);
+        let mut s = Stopping::new(Repetitions::Auto { min: 3, max: 20, target_width: 0.05 }, vec![None]);
         for i in 0..stats::MIN_SAMPLES_FOR_INTERVAL {
             assert!(!s.is_done(0), "done after {i} identical samples");
             assert_eq!(s.record(0, Some(1.0)).is_some(), i + 1 >= stats::MIN_SAMPLES_FOR_INTERVAL);
@@ -189,7 +195,7 @@ mod tests {
 
     #[test]
     fn noisy_samples_run_to_the_maximum() {
-        let mut s = Sampler::new(AUTO, vec![None, None]);
+        let mut s = Stopping::new(AUTO, vec![None, None]);
         for x in [1.0, 1.2, 0.9, 1.1, 0.8, 1.15, 0.85, 1.05] {
             s.record(0, Some(x));
             assert!(!s.is_done(0));
@@ -202,7 +208,7 @@ mod tests {
 
     #[test]
     fn a_noisy_start_goes_on_until_the_interval_narrows() {
-        let mut s = Sampler::new(Repetitions::Auto { min: 3, max: 20, target_width: 0.05 }, vec![None]);
+        let mut s = Stopping::new(Repetitions::Auto { min: 3, max: 20, target_width: 0.05 }, vec![None]);
         let xs = [1.0, 1.3, 1.0, 1.01, 0.99, 1.0, 1.02, 0.98, 1.0, 1.01, 0.99, 1.0, 1.0, 1.0, 1.0];
         let mut stopped = None;
         for (i, x) in xs.into_iter().enumerate() {
@@ -220,9 +226,9 @@ mod tests {
     fn a_configuration_paired_with_its_reference_stops_on_its_ratio_and_the_reference_waits_for_it() {
         // Configuration 1 is paired with reference 0; both swing by ±20% from round to round, together, so the
         // ratio is 0.5 throughout; configuration 2 is noisy on its own and paired with nothing.
-        let reference = Sampler::paired(&[0, 0, 1], &["ref", "new", "new"], Some("ref"));
+        let reference = Stopping::paired(&[0, 0, 1], &["ref", "new", "new"], Some("ref"));
         assert_eq!(reference, [None, Some(0), None]);
-        let mut s = Sampler::new(AUTO, reference);
+        let mut s = Stopping::new(AUTO, reference);
         let swings = [1.0, 1.2, 0.8, 1.1, 0.9, 1.0];
         for (i, x) in swings.into_iter().enumerate() {
             assert!(!s.is_done(1), "done after {i}");
@@ -241,7 +247,7 @@ mod tests {
         }
         assert!(s.is_done(0) && s.is_done(2), "at the maximum");
         // A reference that is quiet on its own still waits for a configuration paired with it.
-        let mut s = Sampler::new(AUTO, vec![None, Some(0)]);
+        let mut s = Stopping::new(AUTO, vec![None, Some(0)]);
         for x in [1.0, 1.2, 0.8, 1.1, 0.9, 1.0] {
             s.record(0, Some(1.0));
             s.record(1, Some(x));
@@ -250,16 +256,25 @@ mod tests {
         assert!(!s.is_done(1) && !s.is_done(0));
     }
 
+    /// A timing of nothing in particular.
+    fn any_timing() -> Timing {
+        let stats = r#"{"nodes": 0, "leaves": 0, "depth": 0, "bytes": 0, "sah_cost": 0}"#;
+        let json = format!(
+            r#"{{"scene_s": 0, "build_s": 0, "trace_s": 0, "encode_s": 0, "output_hash": 0, "scene_fingerprint": 0, "stats": {stats}, "peer_info": "-"}}"#
+        );
+        serde_json::from_str(&json).unwrap()
+    }
+
     #[test]
     fn deterministic_metrics_stop_at_the_minimum_and_fixed_rules_at_their_count() {
-        let mut s = Sampler::new(AUTO, vec![None, None]);
+        let mut s = Stopping::new(AUTO, vec![None, None]);
         for _ in 0..6 {
             assert!(!s.is_done(1));
-            assert_eq!(timed_value(&Timing::untimed(0), "nodes_per_ray"), None);
+            assert_eq!(timed_value(&any_timing(), "nodes_per_ray"), None);
             s.record(1, None);
         }
         assert!(s.is_done(1));
-        let mut f = Sampler::new(Repetitions::Fixed(2), vec![None]);
+        let mut f = Stopping::new(Repetitions::Fixed(2), vec![None]);
         f.record(0, Some(1.0));
         assert!(!f.is_done(0));
         f.record(0, Some(5.0));
@@ -268,7 +283,7 @@ mod tests {
 
     #[test]
     fn expected_repetitions_follow_what_configurations_did() {
-        let mut s = Sampler::new(AUTO, vec![None, None]);
+        let mut s = Stopping::new(AUTO, vec![None, None]);
         assert_eq!(s.expected_left(0), 6.0 + 0.5 * 3.0, "before any configuration reached the minimum");
         for x in [1.0; 6] {
             s.record(0, Some(x));
