@@ -19,7 +19,7 @@ use std::time::Instant;
 
 use report::history::commits::{self, CommitEntry, CountedEntry};
 
-use crate::ab::{self, Build};
+use crate::ab::build::{Build, base_binary, git, rustc_version};
 use crate::config::Experiment;
 use crate::count::{self, How};
 use crate::error::Error;
@@ -62,8 +62,8 @@ pub fn run(request: &BackfillRequest<'_>) -> Result<(), Error> {
     let exp = if request.quick { exp.quick() } else { exp };
     let mut plan = Plan::new(&exp, crate::plan::available_threads())?;
     plan.skip_unavailable(&exp.path.display().to_string(), false)?;
-    let root = PathBuf::from(ab::git(Path::new("."), &["rev-parse", "--show-toplevel"])?);
-    let listed = ab::git(&root, &["rev-list", "--first-parent", "--reverse", request.range]).map_err(|e| {
+    let root = PathBuf::from(git(Path::new("."), &["rev-parse", "--show-toplevel"])?);
+    let listed = git(&root, &["rev-list", "--first-parent", "--reverse", request.range]).map_err(|e| {
         Error::Input(format!("history backfill: {} is not a revision range of this repository ({e})", request.range))
     })?;
     let commits: Vec<String> = listed.lines().map(String::from).collect();
@@ -81,7 +81,7 @@ pub fn run(request: &BackfillRequest<'_>) -> Result<(), Error> {
     }
     count::valgrind_version()?;
     let build = Build::running()?;
-    let compiler = ab::rustc_version(&root).lines().next().unwrap_or("unknown").to_string();
+    let compiler = rustc_version(&root).lines().next().unwrap_or("unknown").to_string();
     let provenance = Provenance::collect();
     let selected = select(&commits, request.every);
     say!(
@@ -100,9 +100,9 @@ pub fn run(request: &BackfillRequest<'_>) -> Result<(), Error> {
             continue;
         }
         let started = Instant::now();
-        let log = ab::git(&root, &["log", "-1", "--format=%cI%n%s", commit])?;
+        let log = git(&root, &["log", "-1", "--format=%cI%n%s", commit])?;
         let (date, subject) = log.split_once('\n').unwrap_or((&log, ""));
-        let position: u32 = ab::git(&root, &["rev-list", "--first-parent", "--count", commit])?.parse().unwrap_or(1);
+        let position: u32 = git(&root, &["rev-list", "--first-parent", "--count", commit])?.parse().unwrap_or(1);
         let mut entry = CommitEntry {
             commit: commit.to_string(),
             position: position.saturating_sub(1),
@@ -114,7 +114,7 @@ pub fn run(request: &BackfillRequest<'_>) -> Result<(), Error> {
             skipped: String::new(),
         };
         note!("backfill {}/{}: {} {subject}", n + 1, selected.len(), &commit[..12]);
-        let binary = match ab::base_binary(&root, &build, commit) {
+        let binary = match base_binary(&root, &build, commit) {
             Ok(binary) => binary,
             Err(e) => {
                 note!("backfill: {} does not build: {e}", &commit[..12]);

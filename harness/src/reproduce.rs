@@ -10,7 +10,7 @@ use std::process::{Command, Stdio};
 use report::distinct;
 use report::reproduction::{self, Outcome, short_commit as short};
 
-use crate::ab::{Build, Worktree, base_binary, git};
+use crate::ab::build::{Build, Worktree, base_binary, git};
 use crate::cli::{ReproduceArgs, ReproduceAt};
 use crate::config::Experiment;
 use crate::error::Error;
