@@ -1,15 +1,10 @@
 //! `harness instructions` under valgrind on a tiny config: counts of both phases, the same on a second count,
 //! and `harness check` gating on them. Skipped without valgrind, unless `BVHLAB_REQUIRE_VALGRIND=1` (CI).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
-use crate::common;
-use common::harness;
-
-fn temp(name: &str) -> PathBuf {
-    common::temp("count", name)
-}
+use crate::common::{harness, temp};
 
 fn text(o: &Output) -> String {
     format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))

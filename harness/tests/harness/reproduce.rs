@@ -2,15 +2,10 @@
 //! difference; mixed commits, an unknown commit and uncommitted code are one line, exit 2, and write nothing.
 
 use std::path::Path;
-use std::process::Output;
 
 use tracer::accel::AccelKind;
 
-use crate::common::{harness, temp};
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use crate::common::{harness, stderr, temp};
 
 /// Rewrites column `name` of every row of a runs.csv with `f(row index, old value)`.
 fn rewrite(runs: &Path, name: &str, f: impl Fn(usize, &str) -> String) {
@@ -37,7 +32,7 @@ fn copy_set(from: &Path, to: &Path) {
 
 #[test]
 fn a_result_set_reproduces_at_head_and_a_changed_counter_does_not() {
-    let dir = temp("reproduce", "head");
+    let dir = temp("head");
     let cfg = dir.join("small.toml");
     let (list, flat) = (AccelKind::List.name(), AccelKind::FlatBvh.name());
     std::fs::write(
@@ -98,7 +93,7 @@ fn a_result_set_reproduces_at_head_and_a_changed_counter_does_not() {
 
 #[test]
 fn a_result_set_of_mixed_or_unknown_commits_is_refused_with_one_line() {
-    let dir = temp("reproduce", "refused");
+    let dir = temp("refused");
     let cfg = dir.join("tiny.toml");
     std::fs::write(
         &cfg,

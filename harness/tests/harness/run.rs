@@ -1,23 +1,16 @@
-//! The harness as a user runs it: bad configs, a killed and resumed sweep, and the quick paper experiment.
+//! `harness run` as a user runs it: bad configs refused before anything is written, the wide BVH's kernels, samples
+//! of several series (`sample_ms`), a killed and resumed sweep, workers (`processes`), earlier runs kept, automatic
+//! repetitions, claims, a missing Embree, and the quick paper and triangle-scene experiments end to end.
 
 use std::collections::{HashMap, HashSet};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::path::Path;
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 use schema::{Named, PeerKind};
-use tracer::accel::{AccelKind, Traversal};
+use tracer::accel::AccelKind;
 
-use crate::common;
-use common::harness;
-
-fn temp(name: &str) -> PathBuf {
-    common::temp("cli", name)
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use crate::common::{harness, names, stderr, temp};
 
 /// Rows of a runs.csv as (config_id, repetition).
 fn recorded(runs: &Path) -> Vec<(String, u32)> {
@@ -31,9 +24,19 @@ fn recorded(runs: &Path) -> Vec<(String, u32)> {
         .collect()
 }
 
-/// The accelerator names the configs below use.
-fn names() -> (&'static str, &'static str, &'static str, &'static str) {
-    (AccelKind::List.name(), AccelKind::FlatBvh.name(), PeerKind::Embree.name(), Traversal::FrontToBack.name())
+/// The cells of `column` in a runs.csv, row by row (for columns without commas in their values).
+fn column(runs: &Path, column: &str) -> Vec<String> {
+    let text = std::fs::read_to_string(runs).unwrap();
+    let mut lines = text.lines();
+    let i = lines.next().unwrap().split(',').position(|h| h == column).unwrap();
+    lines.map(|l| l.split(',').nth(i).unwrap().to_string()).collect()
+}
+
+/// Keeps the header and the first `rows` rows of a runs.csv (as if the sweep had been killed there).
+fn keep_rows(runs: &Path, rows: usize) {
+    let text = std::fs::read_to_string(runs).unwrap();
+    let kept: Vec<&str> = text.lines().take(rows + 1).collect();
+    std::fs::write(runs, kept.join("\n") + "\n").unwrap();
 }
 
 #[test]
@@ -310,19 +313,6 @@ fn a_packet_not_allowed_or_the_old_packet_size_is_one_line_exit_2_and_nothing_wr
 }
 
 #[test]
-fn validate_prints_runs_and_an_estimate() {
-    let o = harness().args(["validate", "experiments/paper.toml"]).output().unwrap();
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(out.contains("configurations 162"), "{out}");
-    assert!(
-        out.contains("runs           at most 972 recorded (6 repetitions each) + 0 warm-ups, order interleaved"),
-        "{out}"
-    );
-    assert!(out.contains("estimate       ~"), "{out}");
-}
-
-#[test]
 fn with_sample_ms_the_series_of_one_point_are_sampled_together() {
     let dir = temp("together");
     let cfg = dir.join("together.toml");
@@ -533,21 +523,6 @@ fn runs_into_one_folder_keep_every_earlier_run() {
     assert_eq!(std::fs::read_to_string(out.join("runs.csv")).unwrap(), before, "nothing written");
 }
 
-/// The cells of `column` in a runs.csv, row by row (for columns without commas in their values).
-fn column(runs: &Path, column: &str) -> Vec<String> {
-    let text = std::fs::read_to_string(runs).unwrap();
-    let mut lines = text.lines();
-    let i = lines.next().unwrap().split(',').position(|h| h == column).unwrap();
-    lines.map(|l| l.split(',').nth(i).unwrap().to_string()).collect()
-}
-
-/// Keeps the header and the first `rows` rows of a runs.csv (as if the sweep had been killed there).
-fn keep_rows(runs: &Path, rows: usize) {
-    let text = std::fs::read_to_string(runs).unwrap();
-    let kept: Vec<&str> = text.lines().take(rows + 1).collect();
-    std::fs::write(runs, kept.join("\n") + "\n").unwrap();
-}
-
 #[test]
 fn auto_repetitions_stop_when_the_interval_is_narrow_and_at_the_maximum_otherwise() {
     let (_, flat, ..) = names();
@@ -660,42 +635,6 @@ fn check_claims_exits_1_when_a_claim_fails() {
 }
 
 #[test]
-fn report_claims_against_fails_naming_a_claim_that_held_there_and_fails_here_everywhere() {
-    let (list, flat, ..) = names();
-    let dir = temp("claims-against");
-    let claim = "[[claim]]\ntext = \"the tree is faster than brute force\"\nkind = \"faster\"\nseries = \"tree\"\n\
-                 than = \"brute\"\nfactor = 1.0\n";
-    // The same claim over the same settings, recorded once with the BVH as `tree` and once with the list.
-    let record = |name: &str, tree: &str, brute: &str| {
-        let cfg = dir.join(format!("{name}.toml"));
-        std::fs::write(
-            &cfg,
-            format!("name = \"c\"\nrepetitions = 6\n[sweep]\nobjects = 2000\nwidth = 48\nheight = 32\nworkload = \"primary\"\n\
-                 [[series]]\nlabel = \"brute\"\naccel = \"{brute}\"\n[[series]]\nlabel = \"tree\"\naccel = \"{tree}\"\n{claim}"),
-        )
-        .unwrap();
-        let out = dir.join(name);
-        let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
-        assert!(o.status.success(), "{}", stderr(&o));
-        out
-    };
-    let (held, lost) = (record("held", flat, list), record("lost", list, flat));
-    let against = |dir: &Path, recorded: &Path| {
-        harness()
-            .args(["report", dir.to_str().unwrap(), "--claims-against", recorded.to_str().unwrap()])
-            .output()
-            .unwrap()
-    };
-    let o = against(&lost, &held);
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(stderr(&o).contains("claim lost: \"the tree is faster than brute force\""), "{}", stderr(&o));
-    let o = against(&held, &lost);
-    assert!(o.status.success(), "a claim that failed there and holds here is no loss: {}", stderr(&o));
-    let o = against(&held, &dir.join("nothing"));
-    assert_eq!(o.status.code(), Some(2), "not a run folder: {}", stderr(&o));
-}
-
-#[test]
 fn a_claim_at_all_cores_keeps_its_serial_side() {
     let dir = temp("claim-serial");
     let cfg = dir.join("threads.toml");
@@ -752,209 +691,6 @@ fn a_missing_embree_is_reported_skipped_or_refused() {
     assert!(stderr(&o).contains("peers.toml: accel embree: Embree 4 not found") && !refused.exists());
 }
 
-#[test]
-fn baseline_save_and_check_bad_input() {
-    let (list, flat, ..) = names();
-    let dir = temp("baseline");
-    let cfg = dir.join("b.toml");
-    std::fs::write(&cfg, format!("name = \"b\"\nreference = \"brute\"\nrepetitions = 3\n[sweep]\nobjects = 200\nwidth = 32\nheight = 24\nworkload = \"primary\"\n[[series]]\nlabel = \"brute\"\naccel = \"{list}\"\n[[series]]\nlabel = \"tree\"\naccel = \"{flat}\"\n")).unwrap();
-    let run_dir = dir.join("run");
-    let o = harness().args(["run", cfg.to_str().unwrap(), "--out", run_dir.to_str().unwrap()]).output().unwrap();
-    assert!(o.status.success(), "{}", stderr(&o));
-    // Baselines go to results/baselines/NAME relative to the working directory: use the temp dir as one.
-    let save = |force: bool| {
-        let mut c = Command::new(env!("CARGO_BIN_EXE_harness"));
-        c.current_dir(&dir).args(["baseline", "save", run_dir.to_str().unwrap(), "b-test"]);
-        if force {
-            c.arg("--force");
-        }
-        c.output().unwrap()
-    };
-    assert!(save(false).status.success());
-    assert!(dir.join("results/baselines/b-test/runs.csv").is_file());
-    assert!(
-        std::fs::read_to_string(dir.join("results/baselines/b-test/BASELINE.md"))
-            .unwrap()
-            .contains("Recorded at commit")
-    );
-    let o = save(false);
-    assert_eq!(o.status.code(), Some(2), "never overwrite without --force");
-    assert!(stderr(&o).contains("baseline exists; use --force"));
-    assert!(save(true).status.success());
-
-    let baseline = dir.join("results/baselines/b-test");
-    let check = |run: &Path, base: &Path| {
-        harness().args(["check", run.to_str().unwrap(), "--baseline", base.to_str().unwrap()]).output().unwrap()
-    };
-    let o = check(&run_dir, &baseline);
-    assert!(
-        o.status.success(),
-        "a run checked against its own baseline passes: {}{}",
-        String::from_utf8_lossy(&o.stdout),
-        stderr(&o)
-    );
-    assert!(run_dir.join("check.json").is_file());
-    let o = check(&dir.join("nowhere"), &baseline);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("nowhere: no runs.csv here"), "{}", stderr(&o));
-    let other = dir.join("other");
-    std::fs::write(
-        dir.join("o.toml"),
-        "name = \"other\"\n[sweep]\nobjects = 10\nwidth = 8\nheight = 8\nworkload = \"primary\"\n",
-    )
-    .unwrap();
-    assert!(
-        harness()
-            .args(["run", dir.join("o.toml").to_str().unwrap(), "--out", other.to_str().unwrap()])
-            .output()
-            .unwrap()
-            .status
-            .success()
-    );
-    let o = check(&other, &baseline);
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains("does not match the baseline"), "{}", stderr(&o));
-}
-
-/// The length and a hash of a file's bytes.
-fn ab_digest(path: &Path) -> (u64, u64) {
-    use std::hash::{DefaultHasher, Hasher};
-    use std::io::Read;
-    let mut file = std::fs::File::open(path).unwrap();
-    let (mut hash, mut buf, mut len) = (DefaultHasher::new(), vec![0; 1 << 20], 0);
-    loop {
-        match file.read(&mut buf).unwrap() {
-            0 => return (len, hash.finish()),
-            n => {
-                hash.write(&buf[..n]);
-                len += n as u64;
-            }
-        }
-    }
-}
-
-#[test]
-fn ab_against_head_reports_ratios_near_one() {
-    let (_, flat, _, front_to_back) = names();
-    // Takes HEAD's binary from the cache under target/ab/, or this binary when the working tree's sources are
-    // HEAD's (a clean checkout: this binary is HEAD's build), or else builds HEAD's workspace crates in a worktree
-    // under target/ab/ into this build's target folder (its dependencies are this build's: a minute or more); then
-    // times a tiny config with both builds, interleaved. The working tree's code is HEAD's or a small change of
-    // it: no regression, the same answers.
-    let dir = temp("ab");
-    let sweep = format!(
-        "[sweep]\naccel = \"{flat}\"\ntraversal = \"{front_to_back}\"\nobjects = 3000\nwidth = 96\nheight = 64\nworkload = \"primary\"\n"
-    );
-    let cfg = dir.join("ab.toml");
-    std::fs::write(&cfg, format!("name = \"ab\"\nrepetitions = 6\nwarmups = 1\n{sweep}")).unwrap();
-    let binary = Path::new(env!("CARGO_BIN_EXE_harness"));
-    let before = ab_digest(binary);
-    let sources = ["Cargo.toml", "Cargo.lock", "tracer", "schema", "report", "harness"];
-    let status = std::process::Command::new("git")
-        .args(["status", "--porcelain", "--untracked-files=all", "--ignored", "--"])
-        .args(sources)
-        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap())
-        .output()
-        .unwrap();
-    let clean = status.status.success() && status.stdout.is_empty();
-    let o = harness().args(["ab", "--base", "HEAD", cfg.to_str().unwrap()]).output().unwrap();
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert!(o.status.success(), "{out}\n{}", stderr(&o));
-    if clean {
-        // This binary was built from HEAD's sources: it is HEAD's build, taken without compiling anything.
-        assert!(!stderr(&o).contains("ab: building"), "{}", stderr(&o));
-    }
-    assert_eq!(ab_digest(binary), before, "the base build's binary does not stay in place of this one");
-    assert!(out.contains("| default | random-spheres objects 3000 primary serial |"), "{out}");
-    assert!(out.contains("| same |"), "both builds answer alike: {out}");
-    // The ratio and its interval are well formed (how near 1 they come is a measurement, not a test: on a loaded
-    // 2-core machine the interval reached [0.31, 2.11] around a same-build ratio of 0.59).
-    let cell = out.lines().find(|l| l.starts_with("| default")).unwrap().split('|').nth(5).unwrap().to_string();
-    let numbers: Vec<f64> =
-        cell.split(|c: char| !(c.is_ascii_digit() || c == '.')).filter_map(|n| n.parse().ok()).collect();
-    let [ratio, lo, hi] = numbers[..] else { panic!("new / old [lo, hi] in {cell:?}") };
-    assert!(ratio > 0.0 && lo <= ratio && ratio <= hi, "{cell}");
-    // The second time, HEAD's binary is cached.
-    let short = dir.join("short.toml");
-    std::fs::write(&short, format!("name = \"ab\"\nrepetitions = 2\nwarmups = 0\n{sweep}")).unwrap();
-    let o = harness().args(["ab", "--base", "HEAD", short.to_str().unwrap()]).output().unwrap();
-    assert!(o.status.success() && stderr(&o).contains("(built before)"), "{}", stderr(&o));
-    let o = harness().args(["ab", "--base", "no-such-revision", cfg.to_str().unwrap()]).output().unwrap();
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-}
-
-/// Every command that prints to a reader that has gone (`harness list | head -1`) ends quietly with exit 0.
-#[test]
-fn a_closed_stdout_ends_every_printing_command_quietly() {
-    let dir = temp("closed-stdout");
-    let config = dir.join("tiny.toml");
-    std::fs::write(&config, "name = \"tiny\"\n[sweep]\nobjects = 10\nwidth = 16\nheight = 8\n").unwrap();
-    let config = config.to_str().unwrap();
-    for args in [vec!["list"], vec!["validate", config], vec!["--help"], vec!["list", "--help"]] {
-        // The read end is closed before the harness starts, so its first write fails with a broken pipe.
-        let (reader, writer) = std::io::pipe().unwrap();
-        drop(reader);
-        let out = harness().args(&args).stdout(writer).stderr(Stdio::piped()).output().unwrap();
-        assert_eq!(out.status.code(), Some(0), "harness {args:?} with a closed stdout: {}", stderr(&out));
-        assert!(!stderr(&out).contains("panicked"), "harness {args:?}: {}", stderr(&out));
-    }
-}
-
-/// `render` takes every setting from the schema (`--set KEY=VALUE`, a config's defaults), through the run's backend
-/// path (a peer renders the same image as our tree); a wrong key or value is one line, exit 2, nothing written.
-#[test]
-fn render_takes_schema_settings_and_refuses_bad_ones() {
-    let dir = temp("render");
-    let render = |sets: &[&str], out: &str| render_command(&[], sets, &dir.join(out)).output().unwrap();
-    let hash = printed_hash;
-    let base = ["objects=300", "width=48", "height=32"];
-    let flat = render(&base, "flat.png");
-    assert!(flat.status.success(), "{}", stderr(&flat));
-    let out = String::from_utf8_lossy(&flat.stdout);
-    assert!(out.contains("accel=flat-bvh") && out.contains("strategy=serial"), "schema defaults: {out}");
-    let wide = render(&[&base[..], &["accel=wide-bvh", "node_width=4", "leaf_block=16"]].concat(), "wide.png");
-    assert!(wide.status.success(), "{}", stderr(&wide));
-    let obvhs = render(&[&base[..], &["accel=obvhs-bvh2"]].concat(), "obvhs.png");
-    assert!(obvhs.status.success(), "{}", stderr(&obvhs));
-    assert_eq!(hash(&flat), hash(&wide), "every backend renders the same image");
-    assert_eq!(hash(&flat), hash(&obvhs));
-    assert_eq!(hash(&flat).len(), 16);
-    for (set, want) in [
-        ("foo=1", "--set foo: unknown key (allowed: scene, objects,"),
-        ("leaf_size=99", "--set leaf_size: 99 is out of range (allowed: integers 1..=16)"),
-        ("accel=kd-tree", "--set accel: "),
-        ("objects", "--set objects: expected KEY=VALUE"),
-    ] {
-        assert_refused(&render(&[set], "bad.png"), want, &dir.join("bad.png"), set);
-    }
-}
-
-/// `harness render ARGS --set S… --out OUT`.
-fn render_command(args: &[&str], sets: &[&str], out: &Path) -> Command {
-    let mut cmd = harness();
-    cmd.arg("render").args(args);
-    for s in sets {
-        cmd.args(["--set", s]);
-    }
-    cmd.args(["--out", out.to_str().unwrap()]);
-    cmd
-}
-
-/// The 16 hex digits of the image hash `harness render` printed (empty when it printed none).
-fn printed_hash(o: &Output) -> String {
-    let text = String::from_utf8_lossy(&o.stdout).into_owned();
-    text.lines().find_map(|l| l.split(" hash ").nth(1)).map(|h| h[..16].to_string()).unwrap_or_default()
-}
-
-/// Asserts that `o` (`what`) exited 2 with one line naming `want` and wrote nothing at `out`.
-#[track_caller]
-fn assert_refused(o: &Output, want: &str, out: &Path, what: &str) {
-    assert_eq!(o.status.code(), Some(2), "{what}: {}", stderr(o));
-    assert_eq!(stderr(o).trim_end().lines().count(), 1, "{what}: {}", stderr(o));
-    assert!(stderr(o).contains(want), "{what}: expected {want:?} in {}", stderr(o));
-    assert!(!out.exists(), "{what}: nothing written");
-}
-
 /// `experiments/triangle-scenes.toml --quick`: procedural triangle scenes, every backend this machine has (Embree's
 /// single rays and packets, obvhs, tinybvh, ours with both triangle tests), every ray kind, each validated exact.
 #[test]
@@ -974,66 +710,4 @@ fn quick_triangle_scenes_experiment_validates_every_configuration() {
     }
     let scenes: std::collections::HashSet<_> = rows.iter().map(|r| r.scene_fingerprint.clone()).collect();
     assert_eq!(scenes.len(), 2, "one fingerprint per scene");
-}
-
-/// `render` draws triangle scenes, flat-shaded, with every backend that builds on triangles: our structures (both
-/// triangle tests) and the peers draw the same image, and it is not all sky. A backend that cannot build the scene, a
-/// mesh scene without its mesh and a data set not fetched are one line, exit 2, nothing written.
-#[test]
-fn render_draws_triangle_scenes_with_every_backend() {
-    let dir = temp("render-triangles");
-    let render = |sets: &[&str], out: &str| {
-        render_command(&["--count"], sets, &dir.join(out)).env("BVHLAB_DATA", dir.join("no-data")).output().unwrap()
-    };
-    let hash = printed_hash;
-    for (scene, count) in [("scene=tessellated-spheres", "4480 triangles"), ("scene=random-triangles", "20 triangles")]
-    {
-        let base = [scene, "objects=20", "width=48", "height=32"];
-        let mut hashes = HashSet::new();
-        for (i, sets) in [
-            &["accel=list"][..],
-            &["accel=bvh", "triangle_test=moller-trumbore"],
-            &["accel=flat-bvh", "strategy=rayon-bands", "threads=2"],
-            &["accel=wide-bvh", "node_width=4", "leaf_block=16", "triangle_test=moller-trumbore"],
-            &["accel=wide-bvh"],
-            &["accel=obvhs-bvh2"],
-            &["accel=obvhs-cwbvh"],
-        ]
-        .iter()
-        .enumerate()
-        {
-            let out = format!("t{i}.png");
-            let o = render(&[&base[..], sets].concat(), &out);
-            assert!(o.status.success(), "{scene} {sets:?}: {}", stderr(&o));
-            let text = String::from_utf8_lossy(&o.stdout);
-            assert!(text.contains(count) && text.contains("triangle tests"), "{text}");
-            let png = std::fs::read(dir.join(&out)).unwrap();
-            assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{sets:?} wrote a PNG");
-            hashes.insert(hash(&o));
-        }
-        assert_eq!(hashes.len(), 1, "{scene}: every structure and triangle test draws the same image: {hashes:?}");
-        let sky = render(&[&base[..], &["accel=null"]].concat(), "sky.png");
-        assert!(sky.status.success(), "{}", stderr(&sky));
-        assert!(!hashes.contains(&hash(&sky)), "{scene}: the image is not all sky");
-    }
-    for (sets, want) in [
-        (&["accel=tinybvh"][..], "--set accel=tinybvh: tinybvh traces triangles only"),
-        (&["scene=mesh"], "--set scene=mesh needs --set mesh=NAME"),
-        (&["scene=mesh", "mesh=bunny"], "harness fetch bunny"),
-    ] {
-        assert_refused(&render(sets, "bad.png"), want, &dir.join("bad.png"), &format!("{sets:?}"));
-    }
-}
-
-#[test]
-fn a_backfill_of_no_commits_or_an_unknown_revision_is_one_line_exit_2_and_writes_nothing() {
-    let dir = temp("backfill").join("history");
-    for (range, says) in [("no-such-revision..HEAD", "is not a revision range"), ("HEAD..HEAD", "holds no commits")] {
-        let o = harness().args(["history", "backfill", range, "--dir", dir.to_str().unwrap()]).output().unwrap();
-        assert_eq!(o.status.code(), Some(2), "{range}: {}", stderr(&o));
-        let err = stderr(&o);
-        assert_eq!(err.trim().lines().count(), 1, "{err}");
-        assert!(err.contains(range) && err.contains(says), "{err}");
-        assert!(!dir.exists(), "nothing written for {range}");
-    }
 }
