@@ -267,7 +267,7 @@ pub fn run(args: &ReproduceArgs) -> Result<(), Error> {
         count(Outcome::NotReproduced),
         count(Outcome::NotComparable)
     );
-    say!("reproduce: {}: {}", result.outcome().word(), out.join(reproduction::MARKDOWN).display());
+    say!("reproduce: {} ({})", result.headline(), out.join(reproduction::MARKDOWN).display());
     let failed = if args.timings_for_information {
         !result.differences.is_empty()
     } else {

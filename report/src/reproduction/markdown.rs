@@ -21,26 +21,17 @@ pub fn markdown(r: &Reproduction, title: &str, how: &[String]) -> String {
             if o.failed > 0 { format!(" ({} failed validation)", o.failed) } else { String::new() }
         )
     };
-    let count = |outcome: Outcome| r.claims.iter().filter(|c| c.outcome == outcome).count();
     let points = |outcome: Outcome| r.points.iter().filter(|p| p.outcome == outcome).count();
     let mut md = format!("# Reproduction of {title}\n\n");
     for line in how {
         md.push_str(&format!("- {line}\n"));
     }
+    let verdict = r.headline();
+    let (word, rest) = verdict.split_once(": ").unwrap_or((&verdict, ""));
     md.push_str(&format!(
-        "- recorded: {}\n- reproduced: {}\n\n**{}**: {} of {} claims reproduced, {} not reproduced, {} not comparable; \
-         {} configurations' deterministic columns compared, {} differences; {} of {} time ratios reproduced.\n\n",
+        "- recorded: {}\n- reproduced: {}\n\n**{word}**: {rest}.\n\n",
         origin(&r.recorded_origin),
         origin(&r.reproduced_origin),
-        r.outcome().word(),
-        count(Outcome::Reproduced),
-        r.claims.len(),
-        count(Outcome::NotReproduced),
-        count(Outcome::NotComparable),
-        r.configurations_compared,
-        r.differences.len(),
-        points(Outcome::Reproduced),
-        r.points.len(),
     ));
     md.push_str(&format!(
         "A time ratio (a series' time against the reference's, or a claim's, at one point) reproduced when it moved by \

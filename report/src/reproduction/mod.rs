@@ -168,11 +168,100 @@ impl Reproduction {
         let moved = self.claims.iter().any(|c| c.outcome == Outcome::NotReproduced)
             || self.points.iter().any(|p| p.outcome == Outcome::NotReproduced)
             || !self.differences.is_empty();
-        let compared = self.configurations_compared > 0 || self.claims.iter().any(|c| c.outcome == Outcome::Reproduced);
-        match (moved, compared) {
+        // With claims, it reproduced only when every claim did; without, when something was compared.
+        let reproduced = if self.claims.is_empty() {
+            self.configurations_compared > 0 || self.points.iter().any(|p| p.outcome == Outcome::Reproduced)
+        } else {
+            self.claims.iter().all(|c| c.outcome == Outcome::Reproduced)
+        };
+        match (moved, reproduced) {
             (true, _) => Outcome::NotReproduced,
             (false, true) => Outcome::Reproduced,
             (false, false) => Outcome::NotComparable,
         }
+    }
+
+    /// The verdict with each part named: claims, deterministic columns and time ratios, e.g. "not comparable: claims
+    /// 1 of 4 reproduced, 3 not comparable; deterministic columns not compared; time ratios 4 of 20 reproduced, 16
+    /// not comparable".
+    pub fn headline(&self) -> String {
+        let tally = |what: &str, outcomes: Vec<Outcome>| {
+            let n = |o: Outcome| outcomes.iter().filter(|&&x| x == o).count();
+            let mut parts = vec![format!("{} of {} reproduced", n(Outcome::Reproduced), outcomes.len())];
+            for (o, word) in [(Outcome::NotReproduced, "not reproduced"), (Outcome::NotComparable, "not comparable")] {
+                if n(o) > 0 {
+                    parts.push(format!("{} {word}", n(o)));
+                }
+            }
+            if outcomes.is_empty() { format!("no {what}") } else { format!("{what} {}", parts.join(", ")) }
+        };
+        let claims = tally("claims", self.claims.iter().map(|c| c.outcome).collect());
+        let deterministic = match (self.configurations_compared, self.differences.len()) {
+            (0, _) => "deterministic columns not compared (no configuration ran both times alike)".to_string(),
+            (n, 0) => format!("deterministic columns reproduced ({n} configurations)"),
+            (n, d) => format!("deterministic columns differ in {d} of {n} configurations"),
+        };
+        let times = tally("time ratios", self.points.iter().map(|p| p.outcome).collect());
+        format!("{}: {claims}; {deterministic}; {times}", self.outcome().word())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn claim(outcome: Outcome) -> ClaimOutcome {
+        ClaimOutcome { text: "c".into(), recorded: "-".into(), reproduced: "-".into(), outcome, reason: String::new() }
+    }
+
+    fn point(outcome: Outcome) -> PointOutcome {
+        PointOutcome {
+            series: "s".into(),
+            point: "p".into(),
+            recorded: [1.0; 3],
+            reproduced: [1.0; 3],
+            resolution: 0.02,
+            outcome,
+        }
+    }
+
+    fn reproduction(claims: Vec<ClaimOutcome>, points: Vec<PointOutcome>, compared: usize) -> Reproduction {
+        Reproduction {
+            recorded_origin: Origin::default(),
+            reproduced_origin: Origin::default(),
+            claims,
+            reference: None,
+            points,
+            deterministic_columns: Vec::new(),
+            configurations_compared: compared,
+            not_comparable: Vec::new(),
+            only_recorded: 0,
+            only_reproduced: 0,
+            differences: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn reproduced_only_when_every_claim_is_and_the_headline_names_each_part() {
+        use Outcome::{NotComparable, NotReproduced, Reproduced};
+        // A quick run: one claim reproduced, three not comparable, nothing deterministic compared.
+        let quick = reproduction(
+            vec![claim(Reproduced), claim(NotComparable), claim(NotComparable), claim(NotComparable)],
+            vec![point(Reproduced), point(NotComparable)],
+            0,
+        );
+        assert_eq!(quick.outcome(), NotComparable);
+        assert_eq!(
+            quick.headline(),
+            "not comparable: claims 1 of 4 reproduced, 3 not comparable; deterministic columns not compared (no \
+             configuration ran both times alike); time ratios 1 of 2 reproduced, 1 not comparable"
+        );
+        let full = reproduction(vec![claim(Reproduced); 4], vec![point(Reproduced); 55], 162);
+        assert_eq!(full.outcome(), Reproduced);
+        assert!(full.headline().contains("deterministic columns reproduced (162 configurations)"), "{}", full.headline());
+        let moved = reproduction(vec![claim(Reproduced)], vec![point(NotReproduced)], 3);
+        assert_eq!(moved.outcome(), NotReproduced);
+        let no_claims = reproduction(Vec::new(), Vec::new(), 21);
+        assert_eq!(no_claims.outcome(), Reproduced, "without claims, the deterministic columns decide");
     }
 }
