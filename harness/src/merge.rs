@@ -14,17 +14,9 @@ use schema::Row;
 use crate::config::Experiment;
 use crate::error::Error;
 use crate::plan::{Plan, shard};
-use crate::rows::RowLog;
+use crate::rows::{RowLog, read_log};
 use crate::run::{CONFIG_COPY, RUNS_CSV};
 use crate::slurm::{SHARD_JSON, ShardInfo, config_hash, read_json, shard_dir};
-
-/// The rows of a `runs.csv`, a partial last line (a killed run) left out.
-pub fn read_log(path: &Path) -> Result<Vec<Row>, Error> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| Error::Input(format!("{}: cannot read: {e}", path.display())))?;
-    let complete = text.rfind('\n').map_or(0, |i| i + 1);
-    schema::row::read_rows(&text[..complete]).map_err(|e| Error::Input(format!("{}: {e}", path.display())))
-}
 
 /// The `(config_id, repetition)` pairs shard `i` of `n` of `plan` records.
 fn planned(plan: &Plan, shard_of: &[usize], i: usize) -> Vec<(String, u32)> {

@@ -14,7 +14,7 @@ use crate::ab::build::{Build, Worktree, base_binary, git};
 use crate::cli::{ReproduceArgs, ReproduceAt};
 use crate::config::Experiment;
 use crate::error::Error;
-use crate::merge::read_log;
+use crate::rows::read_log;
 use crate::run::{CONFIG_COPY, RUNS_CSV, provenance};
 
 /// The one commit and machine a result set was recorded with.

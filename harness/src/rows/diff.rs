@@ -9,7 +9,7 @@ use schema::Role;
 use schema::row::COLUMNS;
 
 use crate::error::Error;
-use crate::merge::read_log;
+use crate::rows::read_log;
 use crate::run::RUNS_CSV;
 
 /// Provenance that differs from run to run of one build on one machine; ignored with the timings.

@@ -2,8 +2,8 @@
 //! finishes.
 //!
 //! The column contract is `report/ROWS.md` (generated from the schema). A sweep killed at any point leaves
-//! complete lines plus at most one partial last line; [`RowLog::resume`] cuts that line off and reports
-//! which runs are done.
+//! complete lines plus at most one partial last line: [`read_log`] (and so `merge`, `rows-diff` and `reproduce`)
+//! leaves that line out, [`RowLog::resume`] cuts it off the file and reports which runs are done.
 
 pub mod diff;
 
@@ -12,7 +12,27 @@ use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::Path;
 
 use schema::Row;
-use schema::row::{csv_line, header, read_rows};
+use schema::row::{ReadError, csv_line, header, read_rows};
+
+use crate::error::Error;
+
+/// `text` up to its last line end: the complete lines of a row log (a sweep killed mid-write leaves a partial
+/// last line).
+fn complete_lines(text: &str) -> &str {
+    &text[..text.rfind('\n').map_or(0, |i| i + 1)]
+}
+
+/// The rows of a `runs.csv` text, a partial last line (a killed run) left out.
+fn parse_log(text: &str) -> Result<Vec<Row>, ReadError> {
+    read_rows(complete_lines(text))
+}
+
+/// The rows of the `runs.csv` at `path`, a partial last line (a killed run) left out; the file is only read.
+pub fn read_log(path: &Path) -> Result<Vec<Row>, Error> {
+    let text =
+        std::fs::read_to_string(path).map_err(|e| Error::Input(format!("{}: cannot read: {e}", path.display())))?;
+    parse_log(&text).map_err(|e| Error::Input(format!("{}: {e}", path.display())))
+}
 
 /// The append-only row log of one run folder.
 pub struct RowLog {
@@ -34,7 +54,7 @@ impl RowLog {
         let mut file = OpenOptions::new().read(true).write(true).open(path)?;
         let mut text = String::new();
         file.read_to_string(&mut text)?;
-        let complete = text.rfind('\n').map_or(0, |i| i + 1);
+        let complete = complete_lines(&text).len();
         if complete < text.len() {
             file.set_len(complete as u64)?;
         }
@@ -42,8 +62,7 @@ impl RowLog {
         if text.lines().next().unwrap_or_default() != header() {
             return Err(io::Error::new(io::ErrorKind::InvalidData, "its header is not this harness's column list"));
         }
-        let rows =
-            read_rows(&text[..complete]).map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))?;
+        let rows = parse_log(&text).map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))?;
         Ok((Self { file }, rows))
     }
 
@@ -81,6 +100,30 @@ mod tests {
         assert_eq!(text.lines().count(), 3);
         let rows = read_rows(&text).unwrap();
         assert_eq!(rows[1], row, "quotes and commas round-trip");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn read_log_drops_a_partial_last_line_as_resume_does() {
+        let dir = std::env::temp_dir().join(format!("bvhlab-rows-read-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("runs.csv");
+        let mut log = RowLog::create(&path).unwrap();
+        let settings = schema::Settings { threads: schema::Threads::Count(1), ..Default::default() }.normalized();
+        let row = Row { config_id: "abc".into(), repetition: 1, ..Row::of(&settings) };
+        log.append(&row).unwrap();
+        drop(log);
+        let whole = std::fs::read_to_string(&path).unwrap();
+        let killed = format!("{whole}{}", &csv_line(&Row { config_id: "def".into(), ..row.clone() }).unwrap()[..40]);
+        std::fs::write(&path, &killed).unwrap();
+
+        assert_eq!(complete_lines(&killed), whole);
+        assert_eq!(read_log(&path).unwrap(), std::slice::from_ref(&row), "the partial line is left out");
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), killed, "read_log only reads");
+        let (_, resumed) = RowLog::resume(&path).unwrap();
+        assert_eq!(resumed, std::slice::from_ref(&row), "resume keeps the same rows");
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), whole, "resume cuts the partial line off the file");
+        assert_eq!(read_log(&path).unwrap(), [row], "nothing to leave out then");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
