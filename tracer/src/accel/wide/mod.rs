@@ -3,6 +3,7 @@
 //!
 //! - [`params`]: width, leaf block, kernel, child order and any-hit order ([`WideParams`]);
 //! - [`node`]: the wide node (child boxes per axis, 64-byte aligned); [`leaf`]: the primitive blocks;
+//!   [`primitives`]: each primitive's block and its leaf tests;
 //! - [`collapse`]: from the shared binary builder's tree (built with the SAH counting leaf blocks) to wide nodes;
 //! - [`ray`], [`order`], [`stack`], [`traverse`]: the traversal, generic over [`kernel`] (scalar, AVX2, AVX-512),
 //!   child order and counters; [`packet`]: packets of 8 or 16 rays with an active mask; [`tile`]: frustum-culled
@@ -18,6 +19,7 @@ pub mod node;
 pub mod order;
 pub mod packet;
 pub mod params;
+pub mod primitives;
 pub mod ray;
 pub mod stack;
 pub mod tile;

@@ -1,6 +1,7 @@
 //! A ray prepared once for a whole traversal: what every kernel's box and sphere tests read.
 
-use super::leaf::WidePrimitive;
+use glam::Vec3;
+
 use crate::geometry::{Ray, RayBoxTester};
 
 /// A ray's origin, direction, reciprocal direction, slab rows and octant, computed once per ray.
@@ -21,7 +22,8 @@ pub struct RayLanes {
     pub a: f32,
     /// Bit `axis` set when the direction is negative on that axis (0..8).
     pub octant: usize,
-    /// The watertight triangle test's ray space, for leaves that read it (see [`WidePrimitive::prepare`]).
+    /// The watertight triangle test's ray space, for leaves that read it (see
+    /// [`super::leaf::WidePrimitive::prepare`]).
     pub shear: Shear,
 }
 
@@ -65,13 +67,19 @@ impl RayLanes {
             shear: Shear::default(),
         }
     }
+}
 
-    /// Prepares `ray` for leaves of `P`: [`RayLanes::new`] and what `P`'s leaf test reads once per ray.
+/// A ray of [`RayLanes`] as a [`Ray`] (`t_max` is the caller's).
+impl RayLanes {
+    /// The ray these lanes were prepared from (with an unbounded `t_max`).
     #[inline(always)]
-    pub fn for_leaves<P: WidePrimitive>(ray: &Ray) -> Self {
-        let mut r = Self::new(ray);
-        P::prepare(&mut r);
-        r
+    pub fn ray(&self) -> Ray {
+        Ray {
+            origin: Vec3::from_array(self.origin),
+            dir: Vec3::from_array(self.dir),
+            t_min: self.t_min,
+            t_max: f32::INFINITY,
+        }
     }
 }
 

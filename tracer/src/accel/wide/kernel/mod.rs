@@ -1,8 +1,8 @@
 //! The instruction-set kernels: the box test of all `W` children of a node and the sphere test of a leaf block.
 //!
 //! [`Ops`] is what the traversal needs from a kernel; [`scalar`] is portable, [`avx2`] and [`avx512`] use
-//! `std::arch` through the lane arithmetic of [`lanes`], written once for every vector width, and share one [`Ops`]
-//! ([`simd`]). Every kernel computes the same IEEE operations in the same order as the scalar code
+//! `std::arch` through the lane arithmetic of [`lanes`], written once for every vector width ([`vector`]), and share
+//! one [`Ops`] ([`simd`]). Every kernel computes the same IEEE operations in the same order as the scalar code
 //! ([`crate::geometry::RayBoxTester::entry`] and [`crate::geometry::Sphere::intersect`]: subtract then multiply, no
 //! fused multiply-add), so all kernels give bit-identical distances, hits and therefore work counts.
 //!
@@ -19,6 +19,8 @@ pub mod lanes;
 pub mod scalar;
 #[cfg(target_arch = "x86_64")]
 pub mod simd;
+#[cfg(target_arch = "x86_64")]
+pub mod vector;
 
 use super::collapse::Tree;
 use super::leaf::{LeafBlock, WidePrimitive};

@@ -3,7 +3,8 @@
 
 use std::arch::x86_64::{__m128, __m256};
 
-use super::lanes::{self, Vf};
+use super::lanes;
+use super::vector::Vf;
 use super::{Ops, Query};
 use crate::accel::wide::collapse::Tree;
 use crate::accel::wide::leaf::{LeafBlock, WidePrimitive};
