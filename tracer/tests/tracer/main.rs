@@ -2,6 +2,7 @@
 //! traversals (every tree, kernel and primitive), which a binary per file compiled and optimized a dozen times
 //! over (docs/build.md).
 
+mod affinity;
 mod agreement;
 mod build_pinned;
 mod counters;
