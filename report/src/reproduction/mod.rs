@@ -258,7 +258,11 @@ mod tests {
         );
         let full = reproduction(vec![claim(Reproduced); 4], vec![point(Reproduced); 55], 162);
         assert_eq!(full.outcome(), Reproduced);
-        assert!(full.headline().contains("deterministic columns reproduced (162 configurations)"), "{}", full.headline());
+        assert!(
+            full.headline().contains("deterministic columns reproduced (162 configurations)"),
+            "{}",
+            full.headline()
+        );
         let moved = reproduction(vec![claim(Reproduced)], vec![point(NotReproduced)], 3);
         assert_eq!(moved.outcome(), NotReproduced);
         let no_claims = reproduction(Vec::new(), Vec::new(), 21);
