@@ -258,6 +258,15 @@ fn report_command(args: &ReportArgs) -> Result<(), Error> {
         return Err(Error::Input(format!("{}: no {} here (not a run folder)", args.dir.display(), run::RUNS_CSV)));
     }
     let exp = Experiment::load(&path)?;
+    if let Some(recorded) = &args.claims_against
+        && !recorded.join(run::RUNS_CSV).is_file()
+    {
+        return Err(Error::Input(format!(
+            "--claims-against {}: no {} here (allowed: a run folder of the same config)",
+            recorded.display(),
+            run::RUNS_CSV
+        )));
+    }
     write_report(&args.dir, &exp, vec![])?;
     match &args.claims_against {
         Some(recorded) => claims_against(&args.dir, recorded, &exp),
@@ -266,16 +275,9 @@ fn report_command(args: &ReportArgs) -> Result<(), Error> {
 }
 
 /// Fails, naming them, when claims that held in the rows of `recorded` fail at every point in those of `dir`
-/// (`harness report DIR --claims-against RECORDED`: CI's guard on the main job's answers).
+/// (`harness report DIR --claims-against RECORDED`, a run folder checked before anything is written: CI's guard on
+/// the main job's answers).
 fn claims_against(dir: &Path, recorded: &Path, exp: &Experiment) -> Result<(), Error> {
-    let runs = recorded.join(run::RUNS_CSV);
-    if !runs.is_file() {
-        return Err(Error::Input(format!(
-            "--claims-against {}: no {} here (allowed: a run folder of the same config)",
-            recorded.display(),
-            run::RUNS_CSV
-        )));
-    }
     let lost = report::lost_claims(recorded, dir, &exp.report_spec(vec![])).map_err(|e| Error::Input(e.to_string()))?;
     for c in &lost {
         note!(

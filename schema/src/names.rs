@@ -474,7 +474,10 @@ impl Threads {
 
     /// The thread count on this machine ([`Threads::resolve`] with [`Threads::cores_here`]).
     pub fn here(self) -> u32 {
-        self.resolve(Threads::cores_here())
+        match self {
+            Threads::All => Threads::cores_here() as u32,
+            Threads::Count(n) => n,
+        }
     }
 }
 
