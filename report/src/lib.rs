@@ -8,6 +8,7 @@
 //! medians, so reports are reproducible.
 
 pub mod check;
+pub mod headline;
 pub mod history;
 pub mod spec;
 

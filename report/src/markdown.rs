@@ -1,4 +1,5 @@
-//! REPORT.md: what ran, notes, figures, claims, a summary table pooled over seeds, the config.
+//! REPORT.md, answer first: the headline, claims, figures with captions, what ran, a summary table pooled over
+//! seeds, the config.
 
 use schema::column;
 use std::collections::{BTreeMap, BTreeSet};
@@ -14,6 +15,7 @@ use crate::stats;
 pub fn report(rows: &Rows, spec: &ReportSpec, claims: &[ClaimResult]) -> String {
     let mut md = String::new();
     let _ = writeln!(md, "# {}\n", spec.name);
+    headline(&mut md, rows, spec, claims);
     if !spec.description.trim().is_empty() {
         let _ = writeln!(md, "{}\n", spec.description.trim());
     }
@@ -56,6 +58,8 @@ pub fn report(rows: &Rows, spec: &ReportSpec, claims: &[ClaimResult]) -> String 
         }
         md.push('\n');
     }
+    claims_table(&mut md, spec, claims);
+    figures(&mut md, spec);
     what_ran(&mut md, rows, spec);
     if !spec.notes.is_empty() {
         md.push_str("## Notes\n\n");
@@ -64,8 +68,6 @@ pub fn report(rows: &Rows, spec: &ReportSpec, claims: &[ClaimResult]) -> String 
         }
         md.push('\n');
     }
-    figures(&mut md, spec);
-    claims_table(&mut md, spec, claims);
     summary_table(&mut md, rows, spec);
     across_machines(&mut md, rows, spec);
     md.push_str("## Config as run\n\n```toml\n");
@@ -330,19 +332,60 @@ fn machines(md: &mut String, runs: &[Run]) {
     }
 }
 
+/// The headline comparison in a sentence and a grid, and the claims' verdicts counted.
+fn headline(md: &mut String, rows: &Rows, spec: &ReportSpec, claims: &[ClaimResult]) {
+    if let Some(h) = crate::headline::of(spec, &rows.runs) {
+        let _ = writeln!(md, "**{}**\n", h.sentence());
+        if h.cells.len() > 1 {
+            md.push_str(&h.markdown());
+            md.push_str(
+                "\nEach cell: the bar's time over ours, median [95% interval]; **bold**: ours faster, `slower`: \
+                 ours slower, `~`: not told apart.\n\n",
+            );
+        }
+    }
+    if !claims.is_empty() {
+        let count = |v| claims.iter().filter(|c| c.verdict == v).count();
+        let _ = writeln!(
+            md,
+            "Claims: {} of {} hold, {} fail, {} inconclusive ([Claims](#claims)).\n",
+            count(Verdict::Holds),
+            claims.len(),
+            count(Verdict::Fails),
+            count(Verdict::Inconclusive)
+        );
+    }
+}
+
 fn figures(md: &mut String, spec: &ReportSpec) {
     if spec.plots.is_empty() {
         return;
     }
     md.push_str("## Figures\n\n");
     for plot in &spec.plots {
+        let title = plot.title.replace(['[', ']'], "");
         let _ = writeln!(
             md,
-            "![{}](figures/{}.svg)\n\n[PNG](figures/{}.png)\n",
-            plot.title.replace(['[', ']'], ""),
+            "![{title}](figures/{}.svg)\n\n*{title}.* {} [PNG](figures/{}.png)\n",
             plot.file,
+            caption(spec, plot),
             plot.file
         );
+    }
+}
+
+/// What a figure's y axis reads, in words and in the one direction.
+fn caption(spec: &ReportSpec, plot: &crate::spec::PlotSpec) -> String {
+    use crate::spec::PlotKind;
+    let reference = plot.reference.clone().or_else(|| spec.reference.clone()).unwrap_or_default();
+    match plot.kind {
+        PlotKind::Speedup => format!(
+            "{reference}'s {} over each series': above 1, the series is faster; bars are 95% intervals.",
+            plot.y
+        ),
+        PlotKind::Efficiency => format!("Speedup over {reference} divided by the thread count: 1 is linear scaling."),
+        PlotKind::Metric => format!("Median {} per series, bars 95% intervals: lower is faster for a time.", plot.y),
+        PlotKind::TradeOff => format!("Median {} against median {}: lower-left is better for times.", plot.x, plot.y),
     }
 }
 
@@ -351,8 +394,12 @@ fn claims_table(md: &mut String, spec: &ReportSpec, claims: &[ClaimResult]) {
         return;
     }
     md.push_str("## Claims\n\n");
-    md.push_str("| claim | the paper said | measured ratio [95% CI] | threshold | verdict | detail |\n");
-    md.push_str("|---|---|---|---|---|---|\n");
+    let paper = spec.claims.iter().any(|c| c.paper.is_some());
+    md.push_str(if paper {
+        "| claim | the paper said | measured ratio [95% CI] | threshold | verdict | detail |\n|---|---|---|---|---|---|\n"
+    } else {
+        "| claim | measured ratio [95% CI] | threshold | verdict | detail |\n|---|---|---|---|---|\n"
+    });
     for (claim, result) in spec.claims.iter().zip(claims) {
         let measured = if result.ratio.is_finite() {
             format!("{} [{}, {}]", num(result.ratio), num(result.lo), num(result.hi))
@@ -369,22 +416,39 @@ fn claims_table(md: &mut String, spec: &ReportSpec, claims: &[ClaimResult]) {
             ClaimKind::Faster { .. } => format!("≥ {}", compact(result.threshold)),
             ClaimKind::Within { tolerance, .. } => format!("1 ± {}", compact(tolerance)),
         };
-        let verdict = match result.verdict {
-            Verdict::Holds => "**holds**",
-            Verdict::Fails => "**fails**",
-            Verdict::Inconclusive => "inconclusive",
-        };
+        let verdict = format!(
+            "{}{}",
+            match result.verdict {
+                Verdict::Holds => "**holds**",
+                Verdict::Fails => "**fails**",
+                Verdict::Inconclusive => "inconclusive",
+            },
+            points_held(result)
+        );
+        let paper = if paper { format!(" {} |", cell(claim.paper.as_deref().unwrap_or("—"))) } else { String::new() };
         let _ = writeln!(
             md,
-            "| {} | {} | {measured} | {threshold} | {verdict} | {} |",
+            "| {} |{paper} {measured} | {threshold} | {verdict} | {} |",
             cell(&result.text),
-            cell(claim.paper.as_deref().unwrap_or("—")),
             cell(&result.detail)
         );
     }
-    md.push_str("\nRatios are `metric(than) / metric(series)` per object count, pooled over seeds.\n\n");
+    md.push_str(
+        "\nRatios are `metric(than) / metric(series)` at each point, pooled over seeds: above 1, the claim's series \
+         is faster.\n\n",
+    );
     claim_failures(md, spec, claims);
     claim_points(md, spec, claims);
+}
+
+/// " (14/16 points hold)" for a claim judged at several points, else nothing.
+pub fn points_held(result: &ClaimResult) -> String {
+    let n = result.points.len();
+    if n < 2 {
+        return String::new();
+    }
+    let held = result.points.iter().filter(|p| p.verdict == Verdict::Holds).count();
+    format!(" ({held}/{n} points hold)")
 }
 
 /// The config's `if_fails` of every claim that fails somewhere: why, as measured apart, with the points it fails at.
@@ -451,39 +515,48 @@ fn claim_points(md: &mut String, spec: &ReportSpec, claims: &[ClaimResult]) {
 
 fn summary_table(md: &mut String, rows: &Rows, spec: &ReportSpec) {
     let runs = &rows.runs;
+    // Settings a series' own table fixes are implied by its label: only the sweep's axes get a column.
+    let by_series: BTreeSet<&str> = spec.series_fixed.values().flatten().map(String::as_str).collect();
     let varying: Vec<&str> = POINT
         .iter()
         .copied()
-        .filter(|c| *c != column::seed)
+        .filter(|c| *c != column::seed && !by_series.contains(c))
         .filter(|c| runs.iter().map(|r| r.text(c)).collect::<BTreeSet<_>>().len() > 1)
         .collect();
+    let several_seeds = runs.iter().map(|r| r.text(column::seed)).collect::<BTreeSet<_>>().len() > 1;
     md.push_str("## Summary\n\n");
     md.push_str(
-        "One row per configuration with seeds pooled; full per-configuration statistics are in `summary.csv`.\n\n",
+        "One row per configuration with seeds pooled, medians [95% intervals]; every column and statistic is in \
+         `summary.csv` and `summary.parquet`.\n\n",
     );
     let mut header = vec![column::series.to_string()];
     header.extend(varying.iter().map(|c| c.to_string()));
-    header.extend(["seeds", "n", "median total_s [95% CI]", "median Mrays/s"].map(String::from));
+    if several_seeds {
+        header.push("seeds".into());
+    }
+    header.extend(["n", "time (s)", "Mrays/s"].map(String::from));
     let overhead = has_overhead(runs);
     if overhead {
-        header.extend(["median trace ns/ray", "harness ns/ray"].map(String::from));
+        header.extend(["trace ns/ray", "harness ns/ray"].map(String::from));
     }
-    if let Some(reference) = &spec.reference {
-        let metrics: BTreeSet<&str> = runs.iter().map(|r| spec.speedup_metric_of(r.text(column::workload))).collect();
-        let metrics = metrics.into_iter().collect::<Vec<_>>().join(" or ");
-        header.push(format!("speedup in {metrics} vs {reference} [95% CI]"));
+    let bar = spec.bar();
+    if let Some(bar) = &bar {
+        header.push(format!("how much faster than {bar}"));
     }
     let _ = writeln!(md, "| {} |", header.iter().map(|h| cell(h)).collect::<Vec<_>>().join(" | "));
     let _ = writeln!(md, "|{}", "---|".repeat(header.len()));
     for group in pool::seed_pools(runs) {
         let first = group[0];
+        let metric = spec.speedup_metric_of(first.text(column::workload));
         let mut cells = vec![cell(first.series())];
         cells.extend(varying.iter().map(|c| cell(first.text(c))));
-        let seeds: BTreeSet<&str> = group.iter().map(|r| r.text(column::seed)).collect();
-        cells.push(seeds.len().to_string());
+        if several_seeds {
+            let seeds: BTreeSet<&str> = group.iter().map(|r| r.text(column::seed)).collect();
+            cells.push(seeds.len().to_string());
+        }
         cells.push(group.len().to_string());
-        let total = stats::median_ci(&pool::samples(group.iter().copied(), column::total_s));
-        cells.push(format!("{} [{}, {}]", num(total.value), num(total.lo), num(total.hi)));
+        let time = stats::median_ci(&pool::samples(group.iter().copied(), metric));
+        cells.push(format!("{} [{}, {}]", num(time.value), num(time.lo), num(time.hi)));
         cells.push(num(stats::median(&pool::samples(group.iter().copied(), column::mrays_per_s))));
         if overhead {
             let median_of = |metric: &str| {
@@ -493,16 +566,23 @@ fn summary_table(md: &mut String, rows: &Rows, spec: &ReportSpec) {
             cells.push(median_of(column::trace_s));
             cells.push(median_of(column::overhead_s));
         }
-        if let Some(reference) = &spec.reference {
+        if let Some(bar) = &bar {
             let key = format!("{}|pooled speedup", first.config_id());
-            let metric = spec.speedup_metric_of(first.text(column::workload));
-            cells.push(match pool::ratio_against(spec, runs, reference, &group, metric, &[column::seed], &key) {
+            cells.push(match pool::ratio_against(spec, runs, bar, &group, metric, &[column::seed], &key) {
                 Some(e) => format!("{} [{}, {}]", num(e.value), num(e.lo), num(e.hi)),
                 None => "—".into(),
             });
         }
         let _ = writeln!(md, "| {} |", cells.join(" | "));
     }
+    let metrics: BTreeSet<&str> = runs.iter().map(|r| spec.speedup_metric_of(r.text(column::workload))).collect();
+    let _ = writeln!(
+        md,
+        "\nTime: {}. {}",
+        metrics.into_iter().collect::<Vec<_>>().join(" or "),
+        bar.map(|b| format!("How much faster: {b}'s time over the configuration's, above 1 = faster than {b}."))
+            .unwrap_or_default()
+    );
     md.push('\n');
 }
 

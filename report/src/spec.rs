@@ -28,9 +28,58 @@ pub struct ReportSpec {
     pub notes: Vec<String>,
     /// Warnings for the top of the report (e.g. a merge of several machines' rows).
     pub warnings: Vec<String>,
+    /// The comparison the experiment leads with (`[headline]`; `None`: taken from its claims, see
+    /// [`ReportSpec::headline`]).
+    pub headline: Option<HeadlineSpec>,
+}
+
+/// The comparison an experiment leads with: one series against a bar, the faster of `against` at each point; read
+/// as "how much faster is `series`": the bar's time over the series' (above 1: `series` is faster).
+#[derive(Clone, Debug, PartialEq)]
+pub struct HeadlineSpec {
+    /// The series the experiment is about (ours).
+    pub series: String,
+    /// The bar: one series, or several of which the faster at each point counts (e.g. Embree's two fast builds).
+    /// The first is what the page's ratio matrix and summary compare with.
+    pub against: Vec<String>,
+    /// The metric compared (a time; `None`: the experiment's speedup metric).
+    pub metric: Option<String>,
 }
 
 impl ReportSpec {
+    /// The comparison the experiment leads with: `[headline]`, else the first claim of the kind `faster` (its
+    /// series against its `than`, and every other `than` of that series' claims with the same factor), else the
+    /// first series against the reference; `None` without any of them.
+    pub fn headline(&self) -> Option<HeadlineSpec> {
+        if let Some(h) = &self.headline {
+            return Some(h.clone());
+        }
+        let faster = |c: &ClaimSpec| match &c.kind {
+            ClaimKind::Faster { series, than, factor, .. } => {
+                Some((series.clone(), than.clone(), *factor, c.metric.clone()))
+            }
+            ClaimKind::Within { .. } => None,
+        };
+        if let Some((series, than, factor, metric)) = self.claims.iter().find_map(faster) {
+            let mut against = vec![than];
+            for (s, t, f, m) in self.claims.iter().filter_map(faster) {
+                if s == series && f == factor && m == metric && !against.contains(&t) {
+                    against.push(t);
+                }
+            }
+            return Some(HeadlineSpec { series, against, metric: Some(metric) });
+        }
+        let reference = self.reference.clone()?;
+        let series = self.series.iter().find(|s| **s != reference)?.clone();
+        Some(HeadlineSpec { series, against: vec![reference], metric: None })
+    }
+
+    /// The series the page's ratio matrix and summary compare every series with: the headline's first bar, else
+    /// the reference.
+    pub fn bar(&self) -> Option<String> {
+        self.headline().map(|h| h.against[0].clone()).or_else(|| self.reference.clone())
+    }
+
     /// The metric the speedup of a run's configuration is a ratio of (see [`ReportSpec::speedup_metric`]).
     pub fn speedup_metric_of(&self, workload: &str) -> &str {
         speedup_metric(self.speedup_metric.as_deref(), workload)

@@ -46,11 +46,13 @@ pub fn summarise(rows: &Rows, spec: &ReportSpec) -> PolarsResult<DataFrame> {
         frame.with_column(float_column(&format!("{metric}_median_hi"), intervals.iter().map(|e| Some(e.hi))))?;
     }
 
+    // Speedups are against the page's bar (the headline's, else the reference): how much faster each configuration is.
+    let bar = spec.bar();
     let speedups: Vec<Option<stats::Estimate>> = ids
         .iter()
         .zip(&groups)
         .map(|(id, group)| {
-            let reference = spec.reference.as_deref()?;
+            let reference = bar.as_deref()?;
             let key = format!("{id}|speedup");
             let metric = spec.speedup_metric_of(group.first()?.text(column::workload));
             pool::ratio_against(spec, &rows.runs, reference, group, metric, &[], &key)
@@ -58,9 +60,11 @@ pub fn summarise(rows: &Rows, spec: &ReportSpec) -> PolarsResult<DataFrame> {
         .collect();
     let speedup_metrics: Vec<Option<&str>> = groups
         .iter()
-        .map(|g| spec.reference.as_ref().and(g.first()).map(|r| spec.speedup_metric_of(r.text(column::workload))))
+        .map(|g| bar.as_ref().and(g.first()).map(|r| spec.speedup_metric_of(r.text(column::workload))))
         .collect();
     frame.with_column(Column::new("speedup_metric".into(), speedup_metrics))?;
+    let against: Vec<Option<&str>> = groups.iter().map(|_| bar.as_deref()).collect();
+    frame.with_column(Column::new("speedup_against".into(), against))?;
     frame.with_column(float_column("speedup", speedups.iter().map(|e| e.map(|e| e.value))))?;
     frame.with_column(float_column("speedup_lo", speedups.iter().map(|e| e.map(|e| e.lo))))?;
     frame.with_column(float_column("speedup_hi", speedups.iter().map(|e| e.map(|e| e.hi))))?;

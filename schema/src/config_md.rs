@@ -22,6 +22,7 @@ const TABLES: &str = "\
 | `[quick]` | overrides for `--quick`: repetitions (and the auto keys), warmups, settings |
 | `[[plot]]` | `file`, `title`, `kind` (`metric`, `speedup`, `efficiency`, `trade-off`: metric `x` against metric `y`, one point per series), `x` (a setting: numbers on a numeric axis, words such as `workload` as categories), `y` (a metric), `log_x`, `log_y`, `series`, `where`, `reference` (the series a speedup plot compares with, instead of the experiment's) |
 | `[[claim]]` | `text`, `paper`, `if_fails` (why it fails where it does, printed only then), `kind` (`faster` with `factor` and `per_thread`, or `within` with `tolerance`), `series`, `than`, `metric`, `min_objects`, `max_objects`, `where` |
+| `[headline]` | `series`, `against` (a label or a list: the faster at each point is the bar), `metric`: the comparison the report, the site and the index lead with, read as the bar's time over the series' (above 1: the series is faster); the page's ratio matrix, summary speedups and speedup figures without a `reference` compare with the first of `against`. Absent: the first `faster` claim's series against its `than` (with every other `than` of that series' claims of the same factor), else the first series against `reference` |
 ";
 
 /// The whole text of configuration.md.

@@ -9,7 +9,7 @@ mod table;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use report::spec::{ClaimKind, ClaimSpec, PlotKind, PlotSpec, ReportSpec};
+use report::spec::{ClaimKind, ClaimSpec, HeadlineSpec, PlotKind, PlotSpec, ReportSpec};
 use schema::columns::Replaced;
 use schema::{Axis, AxisValue, MeshSource, Raw};
 
@@ -130,6 +130,8 @@ pub struct Experiment {
     pub quick: Option<Quick>,
     pub plots: Vec<PlotSpec>,
     pub claims: Vec<ClaimSpec>,
+    /// `[headline]`: the comparison the report leads with (`None`: taken from the claims).
+    pub headline: Option<HeadlineSpec>,
 }
 
 const TOP_KEYS: &[&str] = &[
@@ -152,6 +154,7 @@ const TOP_KEYS: &[&str] = &[
     "quick",
     "plot",
     "claim",
+    "headline",
 ];
 
 /// Keys of all axes, for "allowed keys" messages.
@@ -286,6 +289,7 @@ impl Experiment {
                 .map(|p| parse_plot(p, &labels, reference.is_some()))
                 .collect::<Result<_, _>>()?,
             claims: top.sections("claim")?.iter().map(|c| parse_claim(c, &labels)).collect::<Result<_, _>>()?,
+            headline: top.section("headline")?.map(|h| parse_headline(&h, &labels)).transpose()?,
             name,
             reference,
             series,
@@ -319,6 +323,7 @@ impl Experiment {
             config_text: self.text.clone(),
             notes,
             warnings: vec![],
+            headline: self.headline.clone(),
         }
     }
 }
@@ -495,6 +500,23 @@ fn parse_plot(p: &Section<'_>, labels: &Labels, has_reference: bool) -> Result<P
 }
 
 /// One `[[claim]]` table.
+/// `[headline]`: `series` against `against` (one label or several, the faster at each point counting), optional
+/// `metric`.
+fn parse_headline(h: &Section<'_>, labels: &Labels) -> Result<HeadlineSpec, Error> {
+    h.only(&["series", "against", "metric"])?;
+    let series = h.required_string("series")?.to_string();
+    labels.check(h, "series", &series)?;
+    let against = h.strings("against")?.ok_or_else(|| h.error_here("missing key \"against\" (series labels)"))?;
+    if against.is_empty() {
+        return Err(h.error("against", "empty list (allowed: one or more series labels)"));
+    }
+    for a in &against {
+        labels.check(h, "against", a)?;
+    }
+    let metric = h.string("metric")?.map(|_| metric(h, "metric")).transpose()?;
+    Ok(HeadlineSpec { series, against, metric })
+}
+
 fn parse_claim(c: &Section<'_>, labels: &Labels) -> Result<ClaimSpec, Error> {
     c.only(&[
         "text",

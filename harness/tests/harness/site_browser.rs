@@ -2,7 +2,9 @@
 //! pipe): the site built from the committed results/ loads every page without console errors (each page's load
 //! time is printed, not asserted: speed is measured, never gated by a test), the index links every experiment,
 //! hovering a known point shows its median from summary.csv, the meshes and peers pages lead with a ratio matrix
-//! whose every filled cell is coloured by its verdict (above their figures), chart titles and legends stay clear of
+//! whose every filled cell is coloured by its verdict (above their figures), every ratio cell on the index and the
+//! lead pages is green exactly where its interval lies above 1 (one direction: above 1 = ours faster), each leads
+//! with its headline, the index's first screen shows Munich's ambient-occlusion cell, matrix headers stay in view, chart titles and legends stay clear of
 //! the plot (and axis titles of tick labels), and no page's screenshot is blank. Skipped without chromium, unless
 //! `BVHLAB_REQUIRE_BROWSER=1` (CI).
 
@@ -325,6 +327,60 @@ fn the_site_of_the_committed_results_works_in_a_browser() {
     assert!(tip.starts_with(&series), "{tip}");
     assert!((shown - median).abs() <= 5e-4 * median.abs(), "tooltip median {shown}, summary.csv {median}");
     eprintln!("hover over {series} at {objects} objects: median {shown} (summary.csv {median})");
+
+    // One direction and one colour rule on every page: a cell reads "v [lo, hi]", green (faster) exactly where lo > 1,
+    // red (slower) where hi < 1, grey otherwise; the index and each lead page open with a headline.
+    let colour_check = "(() => { const bad = []; let n = 0;
+        for (const td of document.querySelectorAll('table.matrix tbody td')) {
+            const m = td.textContent.match(/^\\s*([0-9.]+)\\s*\\[([0-9.]+),\\s*([0-9.]+)\\]/); if (!m) continue; n++;
+            const [v, lo, hi] = [+m[1], +m[2], +m[3]];
+            const want = lo > 1 ? 'faster' : hi < 1 ? 'slower' : 'same';
+            if (!td.classList.contains(want) || !(lo <= v && v <= hi)) bad.push(td.textContent + ' ' + td.className); }
+        return [n, bad]; })()";
+    for page in ["index", "incoherent", "meshes", "peers", "paper", "resolution"] {
+        browser.open(&url(&format!("{page}.html")));
+        let seen = browser.eval(colour_check);
+        assert!(seen[0].as_u64() > Some(0) || page == "paper", "{page}.html: no ratio cells ({seen})");
+        assert_eq!(seen[1], json!([]), "{page}.html: cells coloured against their interval");
+        let headline = browser.eval(
+            "(() => { const h = document.querySelector('p.headline'), s = document.querySelector('h2, table.summary');
+                return h ? [h.textContent, !s || h.getBoundingClientRect().top < s.getBoundingClientRect().top] : null; })()",
+        );
+        assert!(headline[0].as_str().is_some_and(|t| t.contains("above 1 = ours faster")), "{page}.html: {headline}");
+        if page != "index" {
+            assert_eq!(headline[1], json!(true), "{page}.html: the headline comes before the first section");
+        }
+        eprintln!("{page}.html: {} ratio cells coloured by their intervals; headline {}", seen[0], headline[0]);
+    }
+    // The index answers "is ours faster than Embree on ambient-occlusion rays in Munich, by how much, how sure?" on
+    // its first screen (1280×900 by default here): the incoherent grid's cell, with its interval.
+    browser.open(&url("index.html"));
+    let munich = browser.eval(
+        "(() => { const t = document.querySelector('section.lead table.matrix'); if (!t) return null;
+            const col = Array.from(t.querySelectorAll('thead th')).findIndex(h => h.textContent.includes('ambient-occlusion'));
+            const row = Array.from(t.querySelectorAll('tbody tr')).find(r => r.querySelector('th').textContent.includes('munich'));
+            if (col < 1 || !row) return null; const cell = row.children[col];
+            return [cell.textContent, cell.className, cell.getBoundingClientRect().bottom <= window.innerHeight]; })()",
+    );
+    assert!(munich[0].as_str().is_some_and(|t| t.contains('[')), "index: no Munich ambient-occlusion cell ({munich})");
+    assert_eq!(munich[2], json!(true), "index: the Munich ambient-occlusion cell is below the first screen ({munich})");
+    eprintln!("index: Munich ambient occlusion {} ({}) on the first screen", munich[0], munich[1]);
+    // A long matrix keeps its header row and label column in view: no inner scroll box, sticky cells.
+    browser.open(&url("meshes.html"));
+    let sticky = browser.eval(
+        "(() => { const t = Array.from(document.querySelectorAll('table.matrix')).pop();
+            window.scrollTo(0, t.getBoundingClientRect().top + window.scrollY + 300);
+            const h = t.querySelector('thead th'), l = t.querySelector('tbody th');
+            return [h.getBoundingClientRect().top, getComputedStyle(h).position, getComputedStyle(l).position,
+                    getComputedStyle(t.parentElement).overflowY]; })()",
+    );
+    assert!(
+        sticky[0].as_f64().is_some_and(|top| top.abs() < 2.0),
+        "meshes.html: header not in view after a scroll ({sticky})"
+    );
+    assert_eq!(sticky[1], json!("sticky"), "meshes.html: {sticky}");
+    assert_eq!(sticky[2], json!("sticky"), "meshes.html: {sticky}");
+    assert_ne!(sticky[3], json!("auto"), "meshes.html: the matrix scrolls in a box of its own ({sticky})");
 
     // The head-to-head pages lead with the answer: a ratio matrix coloured by verdict, above their figures.
     for page in ["meshes", "peers"] {

@@ -90,7 +90,8 @@ fn family_colours(runs: &[crate::rows::Run], series: &[&str]) -> Vec<Option<(u8,
 
 /// What a plot shows, as chart data with each point's provenance.
 pub(crate) fn figure_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Figure {
-    let reference = plot.reference.as_deref().or(spec.reference.as_deref());
+    let bar = spec.bar();
+    let reference = plot.reference.as_deref().or(bar.as_deref());
     let metric_ok = rows.is_numeric(&plot.y);
     let runs: Vec<crate::rows::Run> = rows.runs.iter().filter(|r| r.passes(&plot.filter)).cloned().collect();
     let categories = if plot.kind == PlotKind::TradeOff { None } else { pool::categories(&runs, &plot.x) };

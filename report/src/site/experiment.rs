@@ -11,6 +11,7 @@ use super::html::{escape, json_script, num};
 use crate::claims::{self, ClaimResult};
 use crate::error::Error;
 use crate::figures;
+use crate::headline::{self, Headline, Side, ratio};
 use crate::reproduction::{self, Outcome, Reproduction};
 use crate::rows::{self, Rows, Run};
 use crate::spec::{ReportSpec, Verdict};
@@ -28,6 +29,8 @@ pub struct Experiment {
     pub summary: DataFrame,
     /// Its reproductions (`reproductions/<name>/reproduction.json`), by folder name.
     pub reproductions: Vec<(String, Reproduction)>,
+    /// The comparison it leads with, at every point.
+    pub headline: Option<Headline>,
 }
 
 impl Experiment {
@@ -39,7 +42,8 @@ impl Experiment {
         let claims = claims::check_all(&rows, spec);
         let name = dir.file_name().map_or_else(|| spec.name.clone(), |n| n.to_string_lossy().into_owned());
         let reproductions = reproduction::read_all(dir)?;
-        Ok(Experiment { dir: dir.into(), name, spec: spec.clone(), rows, claims, summary, reproductions })
+        let headline = headline::of(spec, &rows.runs);
+        Ok(Experiment { dir: dir.into(), name, spec: spec.clone(), rows, claims, summary, reproductions, headline })
     }
 
     /// The page's file name.
@@ -73,14 +77,67 @@ pub fn badge(verdict: Verdict) -> String {
     format!("<span class=\"verdict {word}\">{word}</span>")
 }
 
+/// A claim's verdict as a badge with its points counted ("holds 14/16").
+pub fn claim_badge(c: &ClaimResult) -> String {
+    let word = verdict_word(c.verdict);
+    let n = c.points.len();
+    let count = if n > 1 {
+        format!(" {}/{n}", c.points.iter().filter(|p| p.verdict == Verdict::Holds).count())
+    } else {
+        String::new()
+    };
+    format!("<span class=\"verdict {word}\" title=\"points where it holds / points judged\">{word}{count}</span>")
+}
+
+/// The headline: its sentence, and (with `grid`) its points as a grid of coloured cells with their intervals.
+pub fn headline_html(exp: &Experiment, grid: bool) -> String {
+    let Some(h) = &exp.headline else { return String::new() };
+    let mut html = format!("<p class=\"headline\">{}</p>\n", escape(&h.sentence()));
+    if !grid || h.cells.len() < 2 {
+        return html;
+    }
+    let g = h.grid();
+    html.push_str(&format!(
+        "<table class=\"matrix answer\" data-series=\"{}\"><thead><tr><th>point</th>{}</tr></thead><tbody>\n",
+        escape(&h.spec.series),
+        g.columns.iter().map(|c| format!("<th>{}</th>", escape(c))).collect::<String>()
+    ));
+    for (label, at) in &g.rows {
+        html.push_str(&format!("<tr><th>{}</th>", escape(if label.is_empty() { "all" } else { label })));
+        for i in at {
+            match i {
+                Some(i) => {
+                    let c = &h.cells[*i];
+                    html.push_str(&format!(
+                        "<td class=\"{}\" title=\"against {}\">{} <span class=\"ci\">[{}, {}]</span></td>",
+                        c.side().class(),
+                        escape(&c.bar),
+                        ratio(c.estimate.value),
+                        ratio(c.estimate.lo),
+                        ratio(c.estimate.hi)
+                    ));
+                }
+                None => html.push_str("<td></td>"),
+            }
+        }
+        html.push_str("</tr>\n");
+    }
+    html.push_str(
+        "</tbody></table>\n<p class=\"legend-line\">Green: ours faster (95% interval above 1); red: slower (below \
+         1); grey: not told apart.</p>\n",
+    );
+    html
+}
+
 /// The page's body; copies the committed figures next to it (`<name>/figures/`). Returns the body and the files
 /// copied.
 pub fn body(exp: &Experiment, out_dir: &Path) -> Result<(String, Vec<PathBuf>), Error> {
-    let mut html =
-        format!("<h1>{}</h1>\n<p class=\"description\">{}</p>\n", escape(&exp.name), escape(&exp.spec.description));
+    let mut html = format!("<h1>{}</h1>\n", escape(&exp.name));
+    html.push_str(&headline_html(exp, true));
     html.push_str(&provenance(exp));
-    html.push_str(&ratio_matrix(exp));
+    html.push_str(&format!("<p class=\"description\">{}</p>\n", inline_code(&exp.spec.description)));
     html.push_str(&claims_table(&exp.claims));
+    html.push_str(&ratio_matrix(exp));
     html.push_str(&reproductions_section(&exp.reproductions));
     let (figures_html, copied) = figures_section(exp, out_dir)?;
     html.push_str(&figures_html);
@@ -92,12 +149,48 @@ pub fn body(exp: &Experiment, out_dir: &Path) -> Result<(String, Vec<PathBuf>), 
     Ok((html, copied))
 }
 
+/// `text` escaped, with Markdown's `code` spans as `<code>`.
+pub fn inline_code(text: &str) -> String {
+    escape(text)
+        .split('`')
+        .enumerate()
+        .map(|(i, part)| if i % 2 == 1 { format!("<code>{part}</code>") } else { part.to_string() })
+        .collect()
+}
+
+/// What the numbers were measured under, as recorded: logical cores (what `threads = "all"` is), the kernels and
+/// ISA, the machine's load and hypervisor steal.
+pub fn context(exp: &Experiment) -> String {
+    let runs = &exp.rows.runs;
+    let join = |v: Vec<String>| v.into_iter().filter(|s| !s.is_empty() && s != "-").collect::<Vec<_>>().join(", ");
+    let loads: Vec<f64> = runs.iter().map(|r| r.num(column::load_avg_1m)).filter(|v| v.is_finite()).collect();
+    let steal: f64 = runs.iter().map(|r| r.num(column::steal_s)).filter(|v| v.is_finite()).sum();
+    let trace: f64 = runs.iter().map(|r| r.num(column::trace_s)).filter(|v| v.is_finite()).sum();
+    let mut parts = vec![format!("{} logical cores (\"all\" threads)", join(exp.distinct(column::logical_cores)))];
+    let kernels = join(exp.distinct(column::simd_kernel_used));
+    if !kernels.is_empty() {
+        parts.push(format!("kernels {kernels}"));
+    }
+    let isa = join(exp.distinct(column::cpu_isa));
+    if !isa.is_empty() {
+        parts.push(format!("ISA {isa}"));
+    }
+    if !loads.is_empty() {
+        parts.push(format!("load (1 min) median {}", num(crate::stats::median(&loads))));
+    }
+    if trace > 0.0 {
+        parts.push(format!("hypervisor steal {:.2}% of trace time", 100.0 * steal / trace));
+    }
+    parts.join("; ")
+}
+
 fn provenance(exp: &Experiment) -> String {
     let list = |values: Vec<String>| values.iter().map(|v| escape(v)).collect::<Vec<_>>().join("<br>");
     let mut html = String::from("<dl class=\"provenance\">\n");
     html.push_str(&format!("<dt>machine</dt><dd>{}</dd>\n", list(exp.machines())));
     html.push_str(&format!("<dt>commit</dt><dd>{}</dd>\n", list(exp.distinct(column::git_commit))));
     html.push_str(&format!("<dt>rustc</dt><dd>{}</dd>\n", list(exp.distinct(column::rustc))));
+    html.push_str(&format!("<dt>context</dt><dd>{}</dd>\n", escape(&context(exp))));
     html.push_str(&format!(
         "<dt>runs</dt><dd>{} timed{}</dd>\n",
         exp.rows.runs.len(),
@@ -111,19 +204,20 @@ fn provenance(exp: &Experiment) -> String {
     html
 }
 
-/// The answer at a glance: every series against the experiment's reference at every point it was compared at
-/// (rows: the points; columns: the series), the ratio `metric(reference) / metric(series)` (above 1: the series is
-/// faster) coloured by what its 95% interval says — faster, slower, or not told apart.
+/// Every series against the page's bar ([`ReportSpec::bar`]) at every point it was compared at (rows: the points;
+/// columns: the series), the ratio `metric(bar) / metric(series)` (above 1: the series is faster) with its 95%
+/// interval, coloured by what the interval says — faster, slower, or not told apart.
 fn ratio_matrix(exp: &Experiment) -> String {
-    let Some(reference) = exp.spec.reference.as_deref() else { return String::new() };
+    let Some(bar) = exp.spec.bar() else { return String::new() };
+    let bar = bar.as_str();
     let runs = &exp.rows.runs;
     let mut points: Vec<String> = Vec::new();
     let mut columns: Vec<(String, Vec<(usize, crate::stats::Estimate)>)> = Vec::new();
-    for series in exp.spec.series.iter().filter(|s| *s != reference) {
+    for series in exp.spec.series.iter().filter(|s| *s != bar) {
         let Some(first) = runs.iter().find(|r| r.series() == series) else { continue };
         let metric = exp.spec.speedup_metric_of(first.text(column::workload));
         let mut cells = Vec::new();
-        for curve in crate::pool::ratio_curves(&exp.spec, runs, reference, series, column::objects, metric) {
+        for curve in crate::pool::ratio_curves(&exp.spec, runs, bar, series, column::objects, metric) {
             for p in curve.points {
                 let label = crate::pool::point_label(&curve.fixed, p.x);
                 let at = points.iter().position(|l| *l == label).unwrap_or_else(|| {
@@ -141,38 +235,30 @@ fn ratio_matrix(exp: &Experiment) -> String {
         return String::new();
     }
     let mut html = format!(
-        "<h2 id=\"ratios\">Against {reference}</h2>\n<p>Each cell is <code>{reference}</code>'s time over the \
-         series' time at that point (above 1: the series is faster), the median of the per-round ratios; green where \
-         its 95% interval lies above 1, red where below, grey where it contains 1. Hover a cell for its interval.</p>\n\
-         <div class=\"table-wrap\"><table class=\"matrix\"><thead><tr><th>point</th>{}</tr></thead><tbody>\n",
+        "<h2 id=\"ratios\">Every series against {bar}</h2>\n<p>How much faster each series is than <code>{bar}</code>: \
+         its time over the series' time at that point (above 1: the series is faster), the median of the per-round \
+         ratios with its 95% interval; green where the interval lies above 1, red where below, grey where it \
+         contains 1.</p>\n<table class=\"matrix\"><thead><tr><th>point</th>{}</tr></thead><tbody>\n",
         columns.iter().map(|(s, _)| format!("<th>{}</th>", escape(s))).collect::<String>(),
-        reference = escape(reference)
+        bar = escape(bar)
     );
     for (i, point) in points.iter().enumerate() {
         html.push_str(&format!("<tr><th>{}</th>", escape(point)));
         for (_, cells) in &columns {
             match cells.iter().find(|(at, _)| *at == i) {
-                Some((_, e)) => {
-                    let class = if e.lo > 1.0 {
-                        "faster"
-                    } else if e.hi < 1.0 {
-                        "slower"
-                    } else {
-                        "same"
-                    };
-                    html.push_str(&format!(
-                        "<td class=\"{class}\" title=\"95% interval [{}, {}]\">{}</td>",
-                        num(e.lo),
-                        num(e.hi),
-                        num(e.value)
-                    ));
-                }
+                Some((_, e)) => html.push_str(&format!(
+                    "<td class=\"{}\">{} <span class=\"ci\">[{}, {}]</span></td>",
+                    Side::of(e).class(),
+                    ratio(e.value),
+                    ratio(e.lo),
+                    ratio(e.hi)
+                )),
                 None => html.push_str("<td></td>"),
             }
         }
         html.push_str("</tr>\n");
     }
-    html.push_str("</tbody></table></div>\n");
+    html.push_str("</tbody></table>\n");
     html
 }
 
@@ -268,7 +354,7 @@ fn claims_table(claims: &[ClaimResult]) -> String {
         html.push_str(&format!(
             "<tr><td>{}</td><td>{}</td><td>{} [{}, {}]</td><td>{}</td><td><details><summary>{}</summary>\
              <table class=\"points\"><tbody>{points}</tbody></table></details></td></tr>\n",
-            badge(c.verdict),
+            claim_badge(c),
             escape(&c.text),
             num(c.ratio),
             num(c.lo),

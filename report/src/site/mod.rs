@@ -206,7 +206,7 @@ mod tests {
     }
 
     #[test]
-    fn an_experiment_page_leads_with_the_ratio_matrix_against_its_reference() {
+    fn an_experiment_page_leads_with_its_headline_then_the_ratio_matrix_against_its_bar() {
         let root = results("matrix");
         let dir = root.join("one");
         let mut spec = spec(&dir);
@@ -219,7 +219,12 @@ mod tests {
         let exp = Experiment::read(&dir, &spec).unwrap();
         let (page, _) = experiment::body(&exp, &root.join("site")).unwrap();
         let matrix = page.find("class=\"matrix\"").expect("a ratio matrix");
-        assert!(matrix < page.find("id=\"claims\"").unwrap() && matrix < page.find("id=\"summary\"").unwrap());
+        let headline = page.find("class=\"headline\"").expect("a headline");
+        assert!(headline < page.find("id=\"claims\"").unwrap() && headline < matrix);
+        assert!(page[headline..].contains(&format!("How much faster {} is than {}", spec.series[1], spec.series[0])));
+        assert!(
+            matrix < page.find("id=\"summary\"").unwrap() && matrix < page.find("id=\"figures\"").unwrap_or(usize::MAX)
+        );
         // One row per object count, one column per other series, each cell the paired ratio of the summary.
         let table = &page[matrix..matrix + page[matrix..].find("</table>").unwrap()];
         let rows = table.matches("<tr><th>").count() - 1; // the header's row
