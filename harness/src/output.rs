@@ -138,13 +138,13 @@ impl Progress {
         self.validation[config] = Some(seconds);
     }
 
-    /// Sets what is left: `runs(config)` further runs expected of each configuration (a configuration not yet
+    /// Sets what is left: `runs[config]` further runs expected of each configuration (a configuration not yet
     /// validated also costs its validation, estimated from those so far).
-    pub fn update(&mut self, runs: impl Fn(usize) -> f64) {
+    pub fn update(&mut self, runs: &[f64]) {
         let (scale, validation) = (self.model_scale(), self.validation_ratio());
         let (mut count, mut seconds) = (0.0, 0.0);
         for config in 0..self.model.len() {
-            let r = runs(config);
+            let r = runs[config];
             if r > 0.0 {
                 let run = self.run_seconds(config, scale);
                 count += r;
@@ -225,11 +225,11 @@ mod tests {
     #[test]
     fn the_estimate_uses_the_model_until_a_configuration_ran_then_its_own_times() {
         let mut p = Progress { bar: None, ..Progress::new(vec![1.0, 2.0]) };
-        p.update(|_| 3.0);
+        p.update(&[3.0, 3.0]);
         assert_eq!(p.seconds_left, 12.0, "model only: 3 x 1 s + 3 x 2 s, and a validation of 1 run each");
         p.validated(0, 1.0);
         p.finished(0, 0.5, "a");
-        p.update(|c| if c == 0 { 2.0 } else { 3.0 });
+        p.update(&[2.0, 3.0]);
         // Configuration 0 ran at half the model's time: its own mean (0.5 s), and the model scaled by 0.5 for 1,
         // whose validation takes twice a run as 0's did.
         assert_eq!(p.seconds_left, 2.0 * 0.5 + 3.0 * 1.0 + 2.0 * 1.0);

@@ -75,14 +75,14 @@ pub fn load_source(source: &str) -> Result<Arc<Mesh>, Error> {
         }
         load_path(path)?
     } else {
-        if DataSet::named(source).is_err() {
+        let Ok(set) = DataSet::named(source) else {
             let names: Vec<_> = registry::DATA_SETS.iter().map(|d| d.name).collect();
             return Err(Error::Input(format!(
                 "unknown data set {source:?} (allowed: {}, or an .obj/.ply file or a folder of .ply files)",
                 names.join(", ")
             )));
-        }
-        load(source)?
+        };
+        cache::load(&cache::root()?, set)?
     });
     LOADED.lock().unwrap().get_or_insert_with(HashMap::new).insert(source.to_string(), mesh.clone());
     Ok(mesh)

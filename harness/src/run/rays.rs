@@ -1,5 +1,5 @@
-//! Ray sets: each scene's set of a ray kind generated once, with the reference's answers to it ([`RayBank`]), the
-//! set a configuration's workload traces ([`workload_rays`]), and the files that hand sets to workers ([`RayFiles`]).
+//! Ray sets: each scene's set of a ray kind generated once, with the reference's answers to it ([`RayBank`]), and the
+//! files that hand sets to workers ([`RayFiles`]).
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -11,17 +11,8 @@ use tracer::rays::{RayAnswers, RayKind, RaySet};
 use tracer::scene::Scene;
 
 use super::reference::{self, Exact, Reference};
-use super::scenes::{SceneData, make_scene};
+use super::scenes::SceneData;
 use crate::error::Error;
-use crate::plan::Plan;
-
-/// The ray set a configuration's workload traces (`None` for the render workload).
-pub fn workload_rays(plan: &Plan, s: &Settings, bank: &mut RayBank) -> Option<std::sync::Arc<RaySet>> {
-    match s.workload {
-        Workload::Rays(k) => Some(bank.get(s, plan.scene_file(), k).0),
-        Workload::Render => None,
-    }
-}
 
 /// A scene's identity for caching: scene source, objects, seed and image size.
 type SceneKey = (String, u64, u64, u32, u32);
@@ -49,41 +40,43 @@ impl RayBank {
         (format!("{source} {view}"), s.objects, s.seed, s.width, s.height)
     }
 
-    /// The ray set of kind `kind` for the scene of `s`, its reference answers and the reference's name.
-    pub fn get(&mut self, s: &Settings, file: Option<&Scene>, kind: RayKind) -> Entry {
-        let key = Self::key(s, file);
-        if let Some(entry) = self.sets.get(&(key.clone(), kind)) {
-            return entry.clone();
+    /// What validates configuration `s` over its scene `scene`: the ray set its workload traces (`None` for the
+    /// render workload), and the reference its answers to its validation kind's set are judged against, checked
+    /// against f64 brute force (`None` for a backend that gives no answers to check). A ray-set workload is
+    /// validated on its own set.
+    pub fn validation(
+        &mut self,
+        s: &Settings,
+        file: Option<&Scene>,
+        scene: &SceneData,
+    ) -> (Option<Arc<RaySet>>, Option<Arc<Reference>>) {
+        let traced = matches!(s.workload, Workload::Rays(_));
+        let answers = crate::backend::of(s.accel).answers();
+        if !traced && !answers {
+            return (None, None);
         }
-        let scene = make_scene(s, file);
-        let (set, answers, name) = match &scene {
-            SceneData::Spheres(sc) => reference::answers(&sc.spheres, generate(kind, &scene, s.seed)),
-            SceneData::Triangles(t) => {
-                reference::answers(&WatertightTriangle::all(t.mesh.triangles()), generate(kind, &scene, s.seed))
+        let key = (Self::key(s, file), s.workload.validation_kind());
+        let (set, answers_of_reference, name) = match self.sets.get(&key) {
+            Some(entry) => entry.clone(),
+            None => {
+                let set = generate(key.1, scene, s.seed);
+                let (answers, name) = reference::answers(scene, &set);
+                let entry = (Arc::new(set), Arc::new(answers), name);
+                self.exact.entry(key.0.clone()).or_insert_with(|| Arc::new(Exact::of(scene)));
+                self.sets.insert(key.clone(), entry.clone());
+                entry
             }
         };
-        self.exact.entry(key.clone()).or_insert_with(|| Arc::new(Exact::of(&scene)));
-        let entry = (Arc::new(set), Arc::new(answers), name);
-        self.sets.insert((key, kind), entry.clone());
-        entry
-    }
-
-    /// The reference that validates `s`: its validation kind's [`RayBank::reference`], or `None` for a backend that
-    /// gives no answers to check.
-    pub fn reference_for(&mut self, s: &Settings, file: Option<&Scene>) -> Option<Arc<Reference>> {
-        crate::backend::of(s.accel).answers().then(|| self.reference(s, file, s.workload.validation_kind()))
-    }
-
-    /// [`RayBank::get`]'s set and answers with the reference's check against f64 brute force.
-    pub fn reference(&mut self, s: &Settings, file: Option<&Scene>, kind: RayKind) -> Arc<Reference> {
-        let key = (Self::key(s, file), kind);
-        if let Some(checked) = self.checked.get(&key) {
-            return checked.clone();
-        }
-        let (set, answers, name) = self.get(s, file, kind);
-        let reference = Arc::new(Reference::check(set, answers, name, self.exact[&key.0].clone()));
-        self.checked.insert(key, reference.clone());
-        reference
+        let reference = answers.then(|| match self.checked.get(&key) {
+            Some(checked) => checked.clone(),
+            None => {
+                let exact = self.exact[&key.0].clone();
+                let checked = Arc::new(Reference::check(set.clone(), answers_of_reference, name, exact));
+                self.checked.insert(key, checked.clone());
+                checked
+            }
+        });
+        (traced.then_some(set), reference)
     }
 }
 

@@ -4,7 +4,7 @@
 use schema::Row;
 
 use super::provenance::{self, Provenance, load_average_1m, timestamp_now};
-use super::stopping;
+use super::schedule::ConfigurationState;
 use super::trial::Timing;
 use super::validate::{Findings, Validation};
 use crate::config::Experiment;
@@ -44,19 +44,21 @@ fn describe(c: &Configuration) -> String {
     format!("{} {} objects={} seed={} {}", c.series, schema::Named::name(s.workload), s.objects, s.seed, s.strategy())
 }
 
-/// What timed run `run` of validated configuration `c` records: for a repetition its row, `width` the interval its
-/// configuration reached; nothing for a warm-up. A timed pass whose output differs from the counted pass's is an
-/// error (the tracer is not deterministic).
+/// What timed run `run` of a validated configuration (`state`) records: for a repetition its row, `width` the
+/// interval its configuration reached; nothing for a warm-up. A timed pass whose output differs from the counted
+/// pass's is an error (the tracer is not deterministic).
 pub fn timed(
     r: &Recording,
-    c: &Configuration,
-    v: &Validation,
+    state: &ConfigurationState,
     run: &PlannedRun,
     t: &Timing,
     width: Option<f64>,
     started: Started,
 ) -> Result<Recorded, Error> {
-    let Validation::Validated(v) = v else { unreachable!("only a validated configuration is timed") };
+    let (c, validation) = (state.configuration, &state.validation);
+    let Some(Validation::Validated { findings: v, .. }) = validation else {
+        unreachable!("only a validated configuration is timed")
+    };
     let Some(rep) = run.repetition else {
         return Ok(Recorded { row: None, what: format!("{} warm-up", describe(c)) });
     };
@@ -68,7 +70,7 @@ pub fn timed(
             t.output_hash
         )));
     }
-    let mut row = validated(r, c, v, started);
+    let mut row = validated(r, state, v, started);
     row.repetition = rep;
     let metric = |x: f64| x.is_finite().then_some(x);
     row.setup_s = metric(t.setup_s);
@@ -98,11 +100,13 @@ pub fn timed(
     Ok(Recorded { row: Some(row.rounded()), what })
 }
 
-/// The one row of a configuration that validation rejected: what it found, no timing (it is never timed), the
-/// kernel it was validated with; says why on stderr.
-pub fn rejected(r: &Recording, c: &Configuration, v: &Findings, started: Started) -> Recorded {
+/// The one row of a configuration that validation rejected (`state`): what it found, no timing (it is never timed),
+/// the kernel it was validated with; says why on stderr.
+pub fn rejected(r: &Recording, state: &ConfigurationState, started: Started) -> Recorded {
+    let (c, validation) = (state.configuration, &state.validation);
+    let Some(Validation::Rejected(v)) = validation else { unreachable!("recorded as rejected once rejected") };
     note!("{}", v.failure(&describe(c)));
-    let mut row = validated(r, c, v, started);
+    let mut row = validated(r, state, v, started);
     row.image_hash = format!("{:016x}", v.output_hash);
     row.peer_info = "-".into();
     row.simd_kernel_used = match c.settings.simd_kernel {
@@ -112,9 +116,10 @@ pub fn rejected(r: &Recording, c: &Configuration, v: &Findings, started: Started
     Recorded { row: Some(row.rounded()), what: format!("{} FAILED validation", describe(c)) }
 }
 
-/// What every row of configuration `c` records but its timing: settings, provenance, counters and validation.
-fn validated(r: &Recording, c: &Configuration, v: &Findings, started: Started) -> Row {
-    let (exp, p, shard) = (r.exp, r.provenance, r.shard);
+/// What every row of a configuration (`state`) records but its timing: settings, repetition rule, provenance,
+/// counters and validation (`v`).
+fn validated(r: &Recording, state: &ConfigurationState, v: &Findings, started: Started) -> Row {
+    let (exp, p, shard, c) = (r.exp, r.provenance, r.shard, state.configuration);
     let Started { load, timestamp } = started;
     let w = &v.counters;
     let (nodes, boxes, prims) = w.per_ray();
@@ -122,7 +127,7 @@ fn validated(r: &Recording, c: &Configuration, v: &Findings, started: Started) -
     row.experiment = exp.name.clone();
     row.config_id = c.id.clone();
     row.series = c.series.clone();
-    row.repetition_rule = exp.repetitions.rule(stopping::metric(exp, c));
+    row.repetition_rule = state.repetition_rule.clone();
     row.rays = w.rays;
     row.nodes_per_ray = nodes;
     row.box_tests_per_ray = boxes;
@@ -176,7 +181,8 @@ mod tests {
 
     use super::*;
     use crate::plan::Plan;
-    use crate::run::validate::Judgement;
+    use crate::run::reference::Judgement;
+    use crate::run::schedule::Schedule;
 
     #[test]
     fn rejected_rows_leave_every_metric_empty() {
@@ -201,7 +207,9 @@ mod tests {
         let provenance = Provenance::collect();
         let recording = Recording { exp: &exp, provenance: &provenance, shard: None };
         let started = Started { load: 0.5, timestamp: "t".into() };
-        let row = rejected(&recording, &plan.configurations[0], &v, started).row.unwrap();
+        let mut schedule = Schedule::new(&exp, &plan);
+        schedule.states[0].validation = Some(Validation::Rejected(v));
+        let row = rejected(&recording, &schedule.states[0], started).row.unwrap();
         assert_eq!((row.validation, row.mismatches), (ValidationStatus::Failed, 3));
         assert_eq!((row.grazing, row.reference_checked, row.wrong_side), (2, 16_384, WrongSide::Backend));
         assert_eq!((row.ties, row.leaks), (4, 5));

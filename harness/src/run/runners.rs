@@ -3,7 +3,11 @@
 //! runner (its pool and backend, or its worker) from its first timed run to its last, or per block of runs with
 //! `processes` above 1.
 
-use super::rays::{RayBank, RayFiles, workload_rays};
+use std::sync::Arc;
+
+use tracer::rays::RaySet;
+
+use super::rays::RayFiles;
 use super::sample::{TakesPasses, sample};
 use super::trial::{Context, Local, Timing, Trial};
 use super::worker::{Step, Worker, WorkerRequest, worker_request};
@@ -53,24 +57,22 @@ impl Runners {
         }
     }
 
-    /// One timed run of each of `configs` (over their workloads' ray sets from `bank`), starting their runners on their first: each is
-    /// built, one after the other, and then they are sampled together, a pass of each in turn ([`sample`]; one
-    /// configuration alone is one run as it always was). Several are the series of one point in an interleaved round
-    /// with `sample_ms`.
+    /// One timed run of each of `runs`' configurations (each over the ray set its validation gave it), starting their
+    /// runners on their first: each is built, one after the other, and then they are sampled together, a pass of each
+    /// in turn ([`sample`]; one configuration alone is one run as it always was). Several are the series of one point
+    /// in an interleaved round with `sample_ms`.
     pub fn sample(
         &mut self,
-        configs: &[usize],
+        runs: &[(usize, Option<Arc<RaySet>>)],
         plan: &Plan,
         exp: &Experiment,
-        bank: &mut RayBank,
     ) -> Result<Vec<Timing>, Error> {
-        let rays: Vec<_> =
-            configs.iter().map(|&i| workload_rays(plan, &plan.configurations[i].settings, bank)).collect();
+        let (configs, rays): (Vec<usize>, Vec<Option<Arc<RaySet>>>) = runs.iter().cloned().unzip();
         self.clock += 1;
-        for &i in configs {
+        for &i in &configs {
             self.slots[i].last_timed = self.clock;
         }
-        self.make_room(configs, exp.processes);
+        self.make_room(&configs, exp.processes);
         let mut picked: Vec<(usize, &mut Slot)> =
             self.slots.iter_mut().enumerate().filter(|(i, _)| configs.contains(i)).collect();
         picked.sort_by_key(|(i, _)| configs.iter().position(|c| c == i));

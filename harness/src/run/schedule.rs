@@ -1,5 +1,6 @@
 //! The schedule: what each configuration still has to run in this sweep ([`Pending`]), what a resumed sweep already
-//! recorded, and when a configuration has repetitions enough ([`Stopping`]).
+//! recorded, the rounds its runs take, and when a configuration has repetitions enough ([`Stopping`], decided by
+//! each configuration's metric, found once here).
 
 use schema::Row;
 
@@ -12,33 +13,29 @@ use crate::plan::{Configuration, Plan, PlannedRun};
 /// Every configuration's state, and the stopping rule that decides when one has repetitions enough.
 pub(super) struct Schedule<'a> {
     exp: &'a Experiment,
+    plan: &'a Plan,
     pub states: Vec<ConfigurationState<'a>>,
-    pub stopping: Stopping,
+    stopping: Stopping,
 }
 
 /// One configuration through the sweep.
 pub(super) struct ConfigurationState<'a> {
     pub configuration: &'a Configuration,
+    /// The metric whose interval decides its repetitions ([`stopping::metric`]).
+    metric: &'a str,
+    /// Its repetition rule as its rows record it (the rule and its metric).
+    pub repetition_rule: String,
     /// Its validation, from before its first timed run.
     pub validation: Option<Validation>,
     /// True once it was rejected (recorded once, never timed), here or in the rows it resumes.
     pub rejected: bool,
     /// The runs it still has in this sweep.
-    pub pending: Pending,
+    pending: Pending,
 }
 
 impl<'a> Schedule<'a> {
+    /// Nothing run yet of `plan`; with interleaved rounds each configuration is paired with its point's reference.
     pub fn new(exp: &'a Experiment, plan: &'a Plan) -> Self {
-        let states = plan
-            .configurations
-            .iter()
-            .map(|configuration| ConfigurationState {
-                configuration,
-                validation: None,
-                rejected: false,
-                pending: Pending::default(),
-            })
-            .collect();
         let reference = if exp.order == crate::config::RunOrder::Interleaved {
             let points: Vec<usize> = plan.configurations.iter().map(|c| c.point).collect();
             let series: Vec<&str> = plan.configurations.iter().map(|c| c.series.as_str()).collect();
@@ -46,51 +43,59 @@ impl<'a> Schedule<'a> {
         } else {
             vec![None; plan.configurations.len()]
         };
-        Schedule { exp, states, stopping: Stopping::new(exp.repetitions, reference) }
-    }
-
-    /// The metric whose interval decides `c`'s repetitions.
-    pub fn metric(&self, c: &Configuration) -> &'a str {
-        stopping::metric(self.exp, c)
+        let stopping = Stopping::new(exp.repetitions, reference);
+        let states = plan
+            .configurations
+            .iter()
+            .map(|configuration| {
+                let metric = stopping::metric(exp, configuration);
+                ConfigurationState {
+                    configuration,
+                    metric,
+                    repetition_rule: exp.repetitions.rule(metric),
+                    validation: None,
+                    rejected: false,
+                    pending: Pending::default(),
+                }
+            })
+            .collect();
+        Schedule { exp, plan, states, stopping }
     }
 
     /// Takes in rows already recorded (a resumed run): a rejected configuration stays rejected, and every recorded
-    /// repetition counts as one done (and, with "auto", as a sample).
-    pub fn resume(&mut self, recorded: &[Row]) {
+    /// repetition counts as one done (and, with "auto", as a sample). Returns the planned runs still to do, round by
+    /// round: a run is to do while its configuration is wanted ([`Schedule::wants`]) and it is a repetition not yet
+    /// recorded or a warm-up of a configuration without any; a round is one run, or with `sample_ms` and interleaved
+    /// order the consecutive runs of one point's series in one repetition, sampled together a pass of each in turn.
+    pub fn resume(&mut self, recorded: &[Row]) -> Vec<Vec<&'a PlannedRun>> {
         let index: std::collections::HashMap<&str, usize> =
             self.states.iter().enumerate().map(|(i, s)| (s.configuration.id.as_str(), i)).collect();
         let mut resumed: Vec<(usize, &Row)> =
             recorded.iter().filter_map(|r| index.get(r.config_id.as_str()).map(|&i| (i, r))).collect();
         resumed.sort_by_key(|(i, r)| (*i, r.repetition));
         for (i, r) in resumed {
-            let metric = self.metric(self.states[i].configuration);
             let state = &mut self.states[i];
             if r.validation == schema::ValidationStatus::Failed {
                 state.rejected = true;
             } else if state.pending.done.insert(r.repetition) {
-                self.stopping.record(i, stopping::recorded_value(r, metric));
+                self.stopping.record(i, stopping::recorded_value(r, state.metric));
             }
         }
-    }
-
-    /// True for a planned run still to do: its configuration was neither rejected nor has repetitions enough, and the
-    /// run is a repetition not yet recorded or a warm-up of a configuration without any.
-    pub fn to_do(&self, run: &PlannedRun) -> bool {
-        let state = &self.states[run.config];
-        !state.rejected
-            && !self.stopping.is_done(run.config)
-            && match run.repetition {
-                Some(rep) => !state.pending.done.contains(&rep),
-                None => self.stopping.count(run.config) == 0,
-            }
-    }
-
-    /// The runs to do, round by round: one run each, or with `sample_ms` and interleaved order the consecutive runs
-    /// of one point's series in one repetition, sampled together a pass of each in turn.
-    pub fn rounds<'p>(&self, plan: &Plan, todo: Vec<&'p PlannedRun>) -> Vec<Vec<&'p PlannedRun>> {
+        let plan = self.plan;
         let together = plan.sample_s > 0.0 && self.exp.order == crate::config::RunOrder::Interleaved;
         let mut rounds: Vec<Vec<&PlannedRun>> = Vec::new();
-        for run in todo {
+        for run in &plan.runs {
+            let state = &mut self.states[run.config];
+            let wanted = !state.rejected && !self.stopping.is_done(run.config);
+            let to_do = wanted
+                && match run.repetition {
+                    Some(rep) => !state.pending.done.contains(&rep),
+                    None => self.stopping.count(run.config) == 0,
+                };
+            if !to_do {
+                continue;
+            }
+            state.pending.add(run);
             match rounds.last_mut() {
                 Some(round)
                     if together
@@ -114,13 +119,12 @@ impl<'a> Schedule<'a> {
     /// Takes in `run`'s timing: one run less to do, its metric's value to the stopping rule. Returns the interval
     /// width its configuration has reached (repetitions only) and whether the configuration is done.
     pub fn took(&mut self, run: &PlannedRun, timing: &Timing) -> (Option<f64>, bool) {
-        let metric = self.metric(self.states[run.config].configuration);
-        self.states[run.config].pending.take(run);
+        let state = &mut self.states[run.config];
+        state.pending.take(run);
         let width = match run.repetition {
-            Some(_) => self.stopping.record(run.config, stopping::timed_value(timing, metric)),
+            Some(_) => self.stopping.record(run.config, stopping::timed_value(timing, state.metric)),
             None => None,
         };
-        let state = &mut self.states[run.config];
         let done = state.pending.is_empty() || self.stopping.is_done(run.config);
         if done {
             state.finish();
@@ -128,10 +132,13 @@ impl<'a> Schedule<'a> {
         (width, done)
     }
 
-    /// Runs configuration `config` is still expected to take, for the time estimate.
-    pub fn expected(&self, config: usize) -> f64 {
-        let p = &self.states[config].pending;
-        p.warmups as f64 + self.stopping.expected_left(config).min(p.repetitions as f64)
+    /// Runs each configuration is still expected to take, for the time estimate.
+    pub fn expected(&self) -> Vec<f64> {
+        let left = |(config, state): (usize, &ConfigurationState)| {
+            let p = &state.pending;
+            p.warmups as f64 + self.stopping.expected_left(config).min(p.repetitions as f64)
+        };
+        self.states.iter().enumerate().map(left).collect()
     }
 }
 

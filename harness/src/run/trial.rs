@@ -202,15 +202,14 @@ pub fn timed(
     Ok(local.finish(&passes[0], steal_s, 1))
 }
 
-/// Runs `settings` once with work counters (untimed): counters, output hash, and (when asked for) the answers to
-/// `answer_rays` (the workload's own set, or the primary set for the render workload) for validation.
+/// Runs `settings` once over `scene` with work counters (untimed): counters, output hash, and (when asked for) the
+/// answers to `answer_rays` (the workload's own set, or the primary set for the render workload) for validation.
 pub fn counted(
     settings: &Settings,
-    file: Option<&Scene>,
+    scene: &SceneData,
     rays: Option<&RaySet>,
     answer_rays: Option<&RaySet>,
 ) -> Result<(WorkCounters, u64, Option<RayAnswers>), Error> {
-    let scene = make_scene(settings, file);
     let setup = Setup::start(settings)?;
     let built = setup.build(backend::of(settings.accel), settings, &scene.geometry())?;
     let (job, strategy) = (scene.job(settings, rays), settings.strategy());
