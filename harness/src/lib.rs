@@ -316,17 +316,33 @@ fn site_command(args: &SiteArgs) -> Result<(), Error> {
     Ok(())
 }
 
+/// What starting a worker process costs beyond its warm-up (exec, the request, the ray file read), in seconds.
+const WORKER_START_S: f64 = 0.02;
+
+/// The estimated wall time of `plan` when every configuration runs `repetitions` (its warm-ups besides): each run
+/// its cost model's time plus its sample (`sample_ms`: a run traces at least that long), and with `processes` above
+/// 1 each worker's start and warm-up (its scene, an untimed build and an untimed pass: about a run of one pass).
+fn estimate_with(exp: &Experiment, plan: &Plan, cores: usize, repetitions: u32) -> f64 {
+    let per_block = exp.repetitions.max().div_ceil(exp.processes.max(1)).max(1);
+    let planned: std::collections::BTreeSet<usize> = plan.runs.iter().map(|r| r.config).collect();
+    planned
+        .into_iter()
+        .map(|c| {
+            let run = plan::estimate_seconds(&plan.configurations[c].settings, cores);
+            let timed = (exp.warmups + repetitions) as f64 * (run + exp.sample_s);
+            let workers =
+                if exp.processes > 1 { repetitions.div_ceil(per_block) as f64 * (run + WORKER_START_S) } else { 0.0 };
+            timed + workers
+        })
+        .sum()
+}
+
 fn validate_command(args: &ValidateArgs) -> Result<(), Error> {
     let exp = load(&args.config, args.quick)?;
     let cores = plan::available_threads();
     let mut plan = Plan::new(&exp, cores)?;
     plan.skip_unavailable(&exp.path.display().to_string(), false)?;
-    // A run with `sample_ms` traces at least that long.
-    let seconds: f64 = plan
-        .runs
-        .iter()
-        .map(|r| plan::estimate_seconds(&plan.configurations[r.config].settings, cores) + exp.sample_s)
-        .sum();
+    let seconds_at = |repetitions: u32| estimate_with(&exp, &plan, cores, repetitions);
     let series: Vec<String> = exp
         .series
         .iter()
@@ -352,15 +368,26 @@ fn validate_command(args: &ValidateArgs) -> Result<(), Error> {
         plan.recorded_runs(),
         format!("{:?}", exp.order).to_lowercase()
     );
-    let fewest = exp.repetitions.min() as f64 / exp.repetitions.max() as f64;
-    if fewest < 1.0 {
+    let (min, max) = (exp.repetitions.min(), exp.repetitions.max());
+    let sampling = format!(
+        "{}{}",
+        if exp.sample_s > 0.0 { format!("{:.0}-ms samples", exp.sample_s * 1e3) } else { "one pass a sample".into() },
+        match exp.processes {
+            1 => String::new(),
+            n => format!(", each configuration in {n} processes"),
+        }
+    );
+    if min < max {
         say!(
-            "estimate       ~{:.0} to ~{:.0} s on {cores} cores (rough cost model, within about 2x)",
-            seconds * fewest,
-            seconds
+            "estimate       ~{:.0} to ~{:.0} s on {cores} cores ({sampling}; rough cost model, within about 2x)",
+            seconds_at(min),
+            seconds_at(max)
         );
     } else {
-        say!("estimate       ~{:.0} s on {cores} cores (rough cost model, within about 2x)", seconds);
+        say!(
+            "estimate       ~{:.0} s on {cores} cores ({sampling}; rough cost model, within about 2x)",
+            seconds_at(max)
+        );
     }
     for n in &plan.notes {
         say!("note           {n}");

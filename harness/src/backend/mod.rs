@@ -174,7 +174,7 @@ mod tests {
     /// Embree runs in worker processes of the harness binary: `harness/tests/harness/cli.rs` runs it on meshes.
     #[test]
     fn a_quick_run_over_tessellated_spheres_validates_every_configuration() {
-        let text = "name = \"tess\"\nrepetitions = 1\nwarmups = 0\n[sweep]\nscene = [\"tessellated-spheres\", \"random-triangles\"]\n\
+        let text = "name = \"tess\"\nsample_ms = 0\nprocesses = 1\nrepetitions = 1\nwarmups = 0\n[sweep]\nscene = [\"tessellated-spheres\", \"random-triangles\"]\n\
                     objects = 30\nwidth = 24\nheight = 16\ntriangle_test = [\"moller-trumbore\", \"watertight\"]\n\
                     workload = [\"primary\", \"shadow\", \"diffuse\", \"ambient-occlusion\", \"render\"]\n\
                     accel = [\"list\", \"bvh\", \"flat-bvh\", \"wide-bvh\", \"obvhs-bvh2\", \"obvhs-cwbvh\", \"tinybvh\"]\ntinybvh_layout = [\"bvh\", \"bvh4-cpu\", \"bvh8-cpu\"]\n\

@@ -43,7 +43,7 @@ mod tests {
 
     #[test]
     fn a_null_series_is_timed_and_counted_but_never_validated() {
-        let text = "name = \"null\"\nrepetitions = 2\nwarmups = 0\n[sweep]\nobjects = 50\nwidth = 16\nheight = 8\n\
+        let text = "name = \"null\"\nsample_ms = 0\nprocesses = 1\nrepetitions = 2\nwarmups = 0\n[sweep]\nobjects = 50\nwidth = 16\nheight = 8\n\
                     workload = [\"primary\", \"render\"]\n[[series]]\nlabel = \"null\"\naccel = \"null\"\n";
         let exp = Experiment::parse(Path::new("null.toml"), text).unwrap();
         let plan = Plan::new(&exp, 1).unwrap();

@@ -56,12 +56,16 @@ pub enum Repetitions {
 }
 
 impl Repetitions {
-    /// Default `min_repetitions` of `"auto"`.
-    pub const AUTO_MIN: u32 = 3;
-    /// Default `max_repetitions` of `"auto"`.
-    pub const AUTO_MAX: u32 = 10;
-    /// Default `target_ci_width` of `"auto"`.
-    pub const AUTO_TARGET_WIDTH: f64 = 0.03;
+    /// Default `min_repetitions` of `"auto"`: ten processes' rounds, whose 95% interval drops the most extreme on
+    /// each side (a process-bootstrap interval needs six; docs/statistics.md, "The defaults").
+    pub const AUTO_MIN: u32 = 10;
+    /// Default `max_repetitions` of `"auto"`: the rounds (one per process) `experiments/resolution.toml` validated.
+    pub const AUTO_MAX: u32 = 24;
+    /// Default `target_ci_width` of `"auto"`: ±1%, so that an A/A ratio settles within ±2% with room to spare.
+    pub const AUTO_TARGET_WIDTH: f64 = 0.02;
+    /// `repetitions` of a config that does not set it: `"auto"` with the defaults above.
+    pub const DEFAULT: Repetitions =
+        Repetitions::Auto { min: Self::AUTO_MIN, max: Self::AUTO_MAX, target_width: Self::AUTO_TARGET_WIDTH };
 
     /// The most repetitions a configuration can get (what the plan lays out).
     pub fn max(self) -> u32 {
@@ -89,6 +93,20 @@ impl Repetitions {
             }
         }
     }
+}
+
+/// `warmups` of a config that does not set it: one untimed round, as `experiments/resolution.toml`.
+pub const DEFAULT_WARMUPS: u32 = 1;
+/// `sample_ms` of a config that does not set it: 50-ms samples whose passes take turns, as
+/// `experiments/resolution.toml` (docs/statistics.md, "Passes in turn").
+pub const DEFAULT_SAMPLE_MS: u32 = 50;
+/// The most `processes` a config may give, and the most the default takes.
+pub const MAX_PROCESSES: u32 = 64;
+
+/// `processes` of a config that does not set it: one per repetition (its maximum, for `"auto"`), at most
+/// [`MAX_PROCESSES`] — one round per process, as `experiments/resolution.toml` validated.
+pub fn default_processes(repetitions: Repetitions) -> u32 {
+    repetitions.max().clamp(1, MAX_PROCESSES)
 }
 
 /// The `[quick]` overrides: repetitions, warm-ups and sweep axes.
@@ -122,6 +140,9 @@ pub struct Experiment {
     /// Processes each configuration is timed in (`processes`): its timed runs fall into that many blocks, each timed
     /// in a worker process of its own, so that what lasts a process's life varies between its runs (1: one process).
     pub processes: u32,
+    /// Whether the config sets `processes` (else it is [`default_processes`] of the repetitions, `[quick]`'s
+    /// included).
+    pub processes_given: bool,
     pub sweep: AxisValues,
     /// `sweep.sphere_file`, resolved against the config's folder.
     pub sphere_file: Option<PathBuf>,
@@ -268,17 +289,20 @@ impl Experiment {
         if let Some(r) = &reference {
             labels.check(&top, "reference", r)?;
         }
+        let repetitions = parse_repetitions(&top)?.unwrap_or(Repetitions::DEFAULT);
+        let processes = top.integer("processes", 1, MAX_PROCESSES as i64)?;
         Ok(Experiment {
             path: path.to_path_buf(),
             text: text.to_string(),
             description: top.string("description")?.unwrap_or("").to_string(),
             speedup_metric: top.string("speedup_metric")?.map(|_| metric(&top, "speedup_metric")).transpose()?,
-            repetitions: parse_repetitions(&top)?.unwrap_or(Repetitions::Fixed(1)),
-            warmups: top.integer("warmups", 0, 100)?.unwrap_or(0) as u32,
+            repetitions,
+            warmups: top.integer("warmups", 0, 100)?.map_or(DEFAULT_WARMUPS, |w| w as u32),
             order: parse_order(&top)?,
             order_seed: top.integer("order_seed", 0, i64::MAX)?.unwrap_or(0) as u64,
-            sample_s: sample_seconds(&top)?.unwrap_or(0.0),
-            processes: top.integer("processes", 1, 64)?.unwrap_or(1) as u32,
+            sample_s: sample_seconds(&top)?.unwrap_or(DEFAULT_SAMPLE_MS as f64 / 1e3),
+            processes: processes.map_or(default_processes(repetitions), |p| p as u32),
+            processes_given: processes.is_some(),
             sweep,
             sphere_file: sweep_section.string("sphere_file")?.map(|f| dir.join(f)),
             exclude: parse_excludes(&top, &labels)?,
@@ -302,6 +326,9 @@ impl Experiment {
             self.repetitions = q.repetitions.unwrap_or(self.repetitions);
             self.warmups = q.warmups.unwrap_or(self.warmups);
             self.sample_s = q.sample_s.unwrap_or(self.sample_s);
+            if !self.processes_given {
+                self.processes = default_processes(self.repetitions);
+            }
             self.sweep.extend(q.sweep);
         }
         self
@@ -612,9 +639,26 @@ mod tests {
     }
 
     #[test]
-    fn processes_default_to_one_and_are_bounded() {
+    fn a_config_that_sets_no_sampling_key_gets_the_validated_method_and_every_key_it_sets_wins() {
         let parse = |extra: &str| Experiment::parse(Path::new("t.toml"), &format!("name = \"t\"\n{extra}[sweep]\n"));
-        assert_eq!(parse("").unwrap().processes, 1);
+        let none = parse("").unwrap();
+        assert_eq!(none.repetitions, Repetitions::Auto { min: 10, max: 24, target_width: 0.02 });
+        assert_eq!((none.warmups, none.sample_s, none.processes, none.order), (1, 0.05, 24, RunOrder::Interleaved));
+        // The old method, spelled out, is what a config that relied on the old defaults says now.
+        let old = parse("repetitions = 9\nwarmups = 0\nsample_ms = 0\nprocesses = 1\n").unwrap();
+        assert_eq!((old.repetitions, old.warmups, old.sample_s, old.processes), (Repetitions::Fixed(9), 0, 0.0, 1));
+        // `processes` follows the repetitions it is not given: one per repetition, at most 64, `[quick]`'s too.
+        assert_eq!(parse("repetitions = 6\n").unwrap().processes, 6);
+        assert_eq!(parse("repetitions = 100\n").unwrap().processes, 64);
+        let auto = parse("repetitions = \"auto\"\nmax_repetitions = 12\n").unwrap();
+        assert_eq!((auto.repetitions.min(), auto.processes), (10, 12));
+        let quick = |extra: &str| {
+            Experiment::parse(Path::new("t.toml"), &format!("name = \"t\"\n{extra}[sweep]\n[quick]\nrepetitions = 4\n"))
+                .unwrap()
+                .quick()
+        };
+        assert_eq!(quick("").processes, 4);
+        assert_eq!(quick("processes = 2\n").processes, 2, "a given value stays");
         assert_eq!(parse("processes = 4\n").unwrap().processes, 4);
         let e = parse("processes = 0\n").unwrap_err().to_string();
         assert!(e.starts_with("t.toml: processes:") && e.contains("1..=64"), "{e}");

@@ -79,7 +79,7 @@ mod tests {
     use crate::config::Experiment;
     use crate::plan::Plan;
 
-    const TEXT: &str = "name = \"t\"\nrepetitions = 2\nreference = \"list\"\n[sweep]\nobjects = [10, 100, 1000]\nseed = [1, 2]\n\
+    const TEXT: &str = "name = \"t\"\nwarmups = 0\nsample_ms = 0\nprocesses = 1\nrepetitions = 2\nreference = \"list\"\n[sweep]\nobjects = [10, 100, 1000]\nseed = [1, 2]\n\
                         workload = \"primary\"\n[[series]]\nlabel = \"list\"\naccel = \"list\"\nstrategy = \"serial\"\n\
                         [[series]]\nlabel = \"par\"\naccel = \"flat-bvh\"\nstrategy = \"rayon-bands\"\nthreads = [1, 2, \"all\"]\n";
 

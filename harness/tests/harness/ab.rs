@@ -34,7 +34,8 @@ fn ab_against_head_reports_ratios_near_one() {
         "[sweep]\naccel = \"{flat}\"\ntraversal = \"{front_to_back}\"\nobjects = 3000\nwidth = 96\nheight = 64\nworkload = \"primary\"\n"
     );
     let cfg = dir.join("ab.toml");
-    std::fs::write(&cfg, format!("name = \"ab\"\nrepetitions = 6\nwarmups = 1\n{sweep}")).unwrap();
+    std::fs::write(&cfg, format!("name = \"ab\"\nsample_ms = 0\nprocesses = 1\nrepetitions = 6\nwarmups = 1\n{sweep}"))
+        .unwrap();
     let binary = Path::new(env!("CARGO_BIN_EXE_harness"));
     let before = ab_digest(binary);
     let sources = ["Cargo.toml", "Cargo.lock", "tracer", "schema", "report", "harness"];

@@ -11,7 +11,7 @@ fn baseline_save_and_check_bad_input() {
     let (list, flat, ..) = names();
     let dir = temp("baseline");
     let cfg = dir.join("b.toml");
-    std::fs::write(&cfg, format!("name = \"b\"\nreference = \"brute\"\nrepetitions = 3\n[sweep]\nobjects = 200\nwidth = 32\nheight = 24\nworkload = \"primary\"\n[[series]]\nlabel = \"brute\"\naccel = \"{list}\"\n[[series]]\nlabel = \"tree\"\naccel = \"{flat}\"\n")).unwrap();
+    std::fs::write(&cfg, format!("name = \"b\"\nwarmups = 0\nsample_ms = 0\nprocesses = 1\nreference = \"brute\"\nrepetitions = 3\n[sweep]\nobjects = 200\nwidth = 32\nheight = 24\nworkload = \"primary\"\n[[series]]\nlabel = \"brute\"\naccel = \"{list}\"\n[[series]]\nlabel = \"tree\"\naccel = \"{flat}\"\n")).unwrap();
     let run_dir = dir.join("run");
     let o = harness().args(["run", cfg.to_str().unwrap(), "--out", run_dir.to_str().unwrap()]).output().unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
@@ -54,7 +54,7 @@ fn baseline_save_and_check_bad_input() {
     let other = dir.join("other");
     std::fs::write(
         dir.join("o.toml"),
-        "name = \"other\"\n[sweep]\nobjects = 10\nwidth = 8\nheight = 8\nworkload = \"primary\"\n",
+        "name = \"other\"\nrepetitions = 1\nwarmups = 0\nsample_ms = 0\nprocesses = 1\n[sweep]\nobjects = 10\nwidth = 8\nheight = 8\nworkload = \"primary\"\n",
     )
     .unwrap();
     assert!(

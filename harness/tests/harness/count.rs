@@ -46,7 +46,7 @@ fn instruction_counts_repeat_exactly_and_gate_the_check() {
     let config = dir.join("tiny.toml");
     std::fs::write(
         &config,
-        "name = \"tiny\"\nreference = \"list\"\nrepetitions = 3\n[sweep]\nobjects = 60\nwidth = 16\nheight = 12\n\
+        "name = \"tiny\"\nwarmups = 0\nsample_ms = 0\nprocesses = 1\nreference = \"list\"\nrepetitions = 3\n[sweep]\nobjects = 60\nwidth = 16\nheight = 12\n\
          workload = \"primary\"\nstrategy = \"serial\"\n\
          [[series]]\nlabel = \"list\"\naccel = \"list\"\n\
          [[series]]\nlabel = \"flat\"\naccel = \"flat-bvh\"\n\

@@ -16,7 +16,7 @@ fn report_claims_against_fails_naming_a_claim_that_held_there_and_fails_here_eve
         let cfg = dir.join(format!("{name}.toml"));
         std::fs::write(
             &cfg,
-            format!("name = \"c\"\nrepetitions = 6\n[sweep]\nobjects = 20000\nwidth = 48\nheight = 32\nworkload = \"primary\"\n\
+            format!("name = \"c\"\nwarmups = 0\nsample_ms = 0\nprocesses = 1\nrepetitions = 6\n[sweep]\nobjects = 20000\nwidth = 48\nheight = 32\nworkload = \"primary\"\n\
                  [[series]]\nlabel = \"brute\"\naccel = \"{brute}\"\n[[series]]\nlabel = \"tree\"\naccel = \"{tree}\"\n{claim}"),
         )
         .unwrap();

@@ -38,7 +38,7 @@ fn a_result_set_reproduces_at_head_and_a_changed_counter_does_not() {
     std::fs::write(
         &cfg,
         format!(
-            "name = \"small\"\nreference = \"brute\"\nrepetitions = 6\n[sweep]\nobjects = [100, 300]\nwidth = 48\n\
+            "name = \"small\"\nwarmups = 0\nsample_ms = 0\nprocesses = 1\nreference = \"brute\"\nrepetitions = 6\n[sweep]\nobjects = [100, 300]\nwidth = 48\n\
              height = 32\nworkload = \"primary\"\n[[series]]\nlabel = \"brute\"\naccel = \"{list}\"\n[[series]]\n\
              label = \"tree\"\naccel = \"{flat}\"\n[[claim]]\ntext = \"the BVH beats the list\"\nkind = \"faster\"\n\
              series = \"tree\"\nthan = \"brute\"\nfactor = 1\n"
@@ -98,7 +98,7 @@ fn a_result_set_of_mixed_or_unknown_commits_is_refused_with_one_line() {
     std::fs::write(
         &cfg,
         format!(
-            "name = \"tiny\"\nrepetitions = 2\n[sweep]\nobjects = 50\nwidth = 16\nheight = 16\nworkload = \"primary\"\n\
+            "name = \"tiny\"\nwarmups = 0\nsample_ms = 0\nprocesses = 1\nrepetitions = 2\n[sweep]\nobjects = 50\nwidth = 16\nheight = 16\nworkload = \"primary\"\n\
              [[series]]\nlabel = \"tree\"\naccel = \"{}\"\n",
             AccelKind::FlatBvh.name()
         ),

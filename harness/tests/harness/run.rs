@@ -226,7 +226,7 @@ fn wide_bvh_runs_validated_and_records_its_kernel() {
     use tracer::accel::wide::Kernel;
     let dir = temp("wide");
     let cfg = dir.join("wide.toml");
-    let text = "name = \"w\"\nrepetitions = 1\nwarmups = 0\n[sweep]\nobjects = 300\nwidth = 40\nheight = 30\n\
+    let text = "name = \"w\"\nsample_ms = 0\nprocesses = 1\nrepetitions = 1\nwarmups = 0\n[sweep]\nobjects = 300\nwidth = 40\nheight = 30\n\
                 strategy = \"serial\"\nworkload = [\"primary\", \"shadow\"]\naccel = \"wide-bvh\"\nnode_width = [4, 8]\n\
                 simd_kernel = [\"scalar\", \"auto\"]\nchild_order = \"octant\"\nleaf_block = 4\n";
     std::fs::write(&cfg, text).unwrap();
@@ -318,7 +318,7 @@ fn with_sample_ms_the_series_of_one_point_are_sampled_together() {
     let cfg = dir.join("together.toml");
     let text = |order: &str| {
         format!(
-            "name = \"together\"\nrepetitions = 2\nwarmups = 1\nsample_ms = 5\norder = \"{order}\"\n[sweep]\n\
+            "name = \"together\"\nprocesses = 1\nrepetitions = 2\nwarmups = 1\nsample_ms = 5\norder = \"{order}\"\n[sweep]\n\
              objects = [300, 400]\nwidth = 32\nheight = 24\nworkload = \"primary\"\n\
              [[series]]\nlabel = \"a\"\n[[series]]\nlabel = \"b\"\n"
         )
@@ -349,7 +349,7 @@ fn a_killed_sweep_resumes_without_losing_or_duplicating_rows() {
     let dir = temp("resume");
     let cfg = dir.join("resume.toml");
     // 3 object counts x 2 seeds x 4 repetitions = 24 rows of a few tens of milliseconds each.
-    std::fs::write(&cfg, format!("name = \"resume\"\nrepetitions = 4\nwarmups = 1\n[sweep]\naccel = \"{list}\"\nobjects = [400, 500, 600]\nseed = [1, 2]\nwidth = 96\nheight = 64\n")).unwrap();
+    std::fs::write(&cfg, format!("name = \"resume\"\nsample_ms = 0\nprocesses = 1\nrepetitions = 4\nwarmups = 1\n[sweep]\naccel = \"{list}\"\nobjects = [400, 500, 600]\nseed = [1, 2]\nwidth = 96\nheight = 64\n")).unwrap();
     let out = dir.join("out");
     let runs = out.join("runs.csv");
     let mut child = harness()
@@ -414,7 +414,7 @@ fn with_processes_each_configuration_is_timed_in_blocks_by_workers_of_its_own() 
     let cfg = dir.join("processes.toml");
     std::fs::write(
         &cfg,
-        "name = \"processes\"\nrepetitions = 6\nprocesses = 3\n[sweep]\nobjects = [10, 20]\nwidth = 32\nheight = 16\n",
+        "name = \"processes\"\nwarmups = 0\nsample_ms = 0\nrepetitions = 6\nprocesses = 3\n[sweep]\nobjects = [10, 20]\nwidth = 32\nheight = 16\n",
     )
     .unwrap();
     let out = dir.join("out");
@@ -450,7 +450,7 @@ fn with_processes_the_series_of_a_round_start_their_workers_together() {
     let cfg = dir.join("series.toml");
     std::fs::write(
         &cfg,
-        "name = \"series\"\nrepetitions = 3\nprocesses = 3\nsample_ms = 5\n[sweep]\nobjects = 10\nwidth = 32\nheight = 16\n\
+        "name = \"series\"\nwarmups = 0\nrepetitions = 3\nprocesses = 3\nsample_ms = 5\n[sweep]\nobjects = 10\nwidth = 32\nheight = 16\n\
          [[series]]\nlabel = \"a\"\n[[series]]\nlabel = \"b\"\naccel = \"bvh\"\n",
     )
     .unwrap();
@@ -470,7 +470,7 @@ fn with_processes_the_series_of_a_round_start_their_workers_together() {
 fn runs_into_one_folder_keep_every_earlier_run() {
     let dir = temp("keep");
     let cfg = dir.join("keep.toml");
-    std::fs::write(&cfg, "name = \"keep\"\nrepetitions = 2\n[sweep]\nobjects = [10, 20]\nwidth = 32\nheight = 16\n")
+    std::fs::write(&cfg, "name = \"keep\"\nwarmups = 0\nsample_ms = 0\nprocesses = 1\nrepetitions = 2\n[sweep]\nobjects = [10, 20]\nwidth = 32\nheight = 16\n")
         .unwrap();
     let out = dir.join("out");
     let run = || harness().args(["run", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
@@ -530,7 +530,7 @@ fn auto_repetitions_stop_when_the_interval_is_narrow_and_at_the_maximum_otherwis
     let cfg = dir.join("auto.toml");
     let run = |extra: &str, resume: bool| {
         let text = format!(
-            "name = \"auto\"\nrepetitions = \"auto\"\nmin_repetitions = 6\nmax_repetitions = 8\n{extra}\n[sweep]\n\
+            "name = \"auto\"\nwarmups = 0\nsample_ms = 0\nprocesses = 1\nrepetitions = \"auto\"\nmin_repetitions = 6\nmax_repetitions = 8\n{extra}\n[sweep]\n\
              accel = \"{flat}\"\nobjects = [50, 60]\nwidth = 32\nheight = 24\nworkload = \"primary\"\n"
         );
         std::fs::write(&cfg, text).unwrap();
@@ -549,7 +549,7 @@ fn auto_repetitions_stop_when_the_interval_is_narrow_and_at_the_maximum_otherwis
     let out = run("speedup_metric = \"nodes_per_ray\"", false);
     let runs = out.join("runs.csv");
     assert_eq!(recorded(&runs).len(), 2 * 6, "2 configurations x min_repetitions");
-    assert!(column(&runs, "repetition_rule").iter().all(|r| r == "auto 6..8 width 0.03 nodes_per_ray"));
+    assert!(column(&runs, "repetition_rule").iter().all(|r| r == "auto 6..8 width 0.02 nodes_per_ray"));
     assert_eq!(column(&runs, "interval_width"), [vec![""; 2], vec!["0.0"; 10]].concat());
     let report = std::fs::read_to_string(out.join("REPORT.md")).unwrap();
     assert!(report.contains("2 of 2 configurations got there, 0 stopped at 8"), "{report}");
@@ -618,7 +618,7 @@ fn check_claims_exits_1_when_a_claim_fails() {
     let cfg = dir.join("claims.toml");
     std::fs::write(
         &cfg,
-        format!("name = \"claims\"\nrepetitions = 6\n[sweep]\nobjects = 300\nwidth = 48\nheight = 32\nworkload = \"primary\"\n\
+        format!("name = \"claims\"\nwarmups = 0\nsample_ms = 0\nprocesses = 1\nrepetitions = 6\n[sweep]\nobjects = 300\nwidth = 48\nheight = 32\nworkload = \"primary\"\n\
          [[series]]\nlabel = \"brute\"\naccel = \"{list}\"\n[[series]]\nlabel = \"tree\"\naccel = \"{flat}\"\n\
          [[claim]]\ntext = \"the list is 1000x faster than the BVH\"\nkind = \"faster\"\nseries = \"brute\"\nthan = \"tree\"\nfactor = 1000\n"),
     )
@@ -640,7 +640,7 @@ fn a_claim_at_all_cores_keeps_its_serial_side() {
     let cfg = dir.join("threads.toml");
     std::fs::write(
         &cfg,
-        "name = \"t\"\nrepetitions = 6\n[sweep]\nobjects = 200\nwidth = 48\nheight = 32\nworkload = \"primary\"\n\
+        "name = \"t\"\nwarmups = 0\nsample_ms = 0\nprocesses = 1\nrepetitions = 6\n[sweep]\nobjects = 200\nwidth = 48\nheight = 32\nworkload = \"primary\"\n\
          threads = [1, 2]\n[[series]]\nlabel = \"serial\"\nstrategy = \"serial\"\n[[series]]\nlabel = \"rayon\"\n\
          strategy = \"rayon-bands\"\n[[claim]]\ntext = \"rayon on all cores is not 100x slower\"\nkind = \"faster\"\n\
          series = \"rayon\"\nthan = \"serial\"\nfactor = 0.01\nwhere = { threads = \"all\" }\n",
@@ -661,7 +661,7 @@ fn a_missing_embree_is_reported_skipped_or_refused() {
     std::fs::write(
         &cfg,
         format!(
-            "name = \"noembree\"\n[sweep]\nobjects = 100\nwidth = 32\nheight = 24\nworkload = \"primary\"\n\
+            "name = \"noembree\"\nrepetitions = 1\nwarmups = 0\nsample_ms = 0\nprocesses = 1\n[sweep]\nobjects = 100\nwidth = 32\nheight = 24\nworkload = \"primary\"\n\
          [[series]]\nlabel = \"ours\"\naccel = \"{flat}\"\n[[series]]\nlabel = \"embree\"\naccel = \"{embree}\"\n"
         ),
     )

@@ -11,7 +11,7 @@ fn stdout(o: &Output) -> String {
 }
 
 /// A config of milliseconds: 2 object counts × 2 seeds = 4 scene cells, 2 series, 2 repetitions.
-const TINY: &str = "name = \"tiny\"\nreference = \"list\"\nrepetitions = 2\n[sweep]\nobjects = [10, 20]\nseed = [1, 2]\n\
+const TINY: &str = "name = \"tiny\"\nwarmups = 0\nsample_ms = 0\nprocesses = 1\nreference = \"list\"\nrepetitions = 2\n[sweep]\nobjects = [10, 20]\nseed = [1, 2]\n\
                     workload = \"primary\"\nwidth = 16\nheight = 12\n[[series]]\nlabel = \"list\"\naccel = \"list\"\n\
                     [[series]]\nlabel = \"flat\"\naccel = \"flat-bvh\"\n";
 
