@@ -34,7 +34,7 @@ pub enum Command {
     /// Count the instructions of each single-thread configuration's build and trace under callgrind (valgrind),
     /// into instructions.csv of the run folder: the deterministic gate of `harness check`.
     Instructions(InstructionsArgs),
-    /// Build another git revision and time both builds on a config, interleaved; report new/old ratios, and fail
+    /// Build another git revision and time both builds on a config, interleaved; report how much faster the new build is (old/new, above 1 = faster), and fail
     /// when the builds' answers differ.
     Ab(AbArgs),
     /// Download a mesh data set once (pinned package, checked SHA-256) into the cache, `$BVHLAB_DATA` or

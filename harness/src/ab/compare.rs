@@ -1,6 +1,7 @@
 //! The comparison proper: times the configurations with both builds, interleaved, each run in a fresh
-//! `harness worker` process; measures flagged single-thread slowdowns again; reports each configuration's time
-//! ratio new/old with its interval and verdict, and whether the builds' answers agree.
+//! `harness worker` process; measures flagged single-thread slowdowns again; reports how much faster the new build
+//! is (old time / new time, above 1 = faster: the one direction of every ratio) with its interval and verdict, and
+//! whether the builds' answers agree.
 
 use std::path::Path;
 
@@ -24,10 +25,11 @@ enum Speed {
 }
 
 impl Speed {
-    /// `e` is new / old; single-thread configurations gate.
+    /// `e` is old / new (how much faster the new build is); single-thread configurations gate. `min_effect` is a
+    /// change of the new build's time: slower means it takes more than `1 + min_effect` times the old time.
     fn of(e: &Estimate, min_effect: f64, gating: bool) -> Speed {
-        let slower = e.lo > 1.0 && e.value > 1.0 + min_effect;
-        let faster = e.hi < 1.0 && e.value < 1.0 - min_effect;
+        let slower = e.hi < 1.0 && e.value < 1.0 / (1.0 + min_effect);
+        let faster = e.lo > 1.0 && e.value > 1.0 / (1.0 - min_effect);
         match (slower, faster) {
             (true, _) if gating => Speed::Regressed,
             (true, _) => Speed::SlowerNotGating,
@@ -118,10 +120,10 @@ struct Pair {
 }
 
 impl Pair {
-    /// The per-round ratios new/old, each round a pair of processes of its own.
+    /// The per-round ratios old/new (above 1: the new build is faster), each round a pair of processes of its own.
     fn ratios(&self) -> RoundRatios {
         RoundRatios {
-            ratios: self.new.iter().zip(&self.old).map(|(n, o)| n / o).collect(),
+            ratios: self.new.iter().zip(&self.old).map(|(n, o)| o / n).collect(),
             processes: (0..self.new.len() as u64).collect(),
         }
     }
@@ -227,13 +229,13 @@ pub(super) fn run(
     }
     say!("## A/B: {} (new, this build) against {} (old, {})\n", exp.name, &rev[..12], request.base);
     say!(
-        "Trace time per configuration, new / old (below 1: faster), the median of per-round ratios with its 95% interval; {} rounds, interleaved. \
+        "How much faster the new build is per configuration: old trace time / new (above 1: faster), the median of per-round ratios with its 95% interval; {} rounds, interleaved. \
          A single-thread configuration flagged as slower is measured again the same way and fails only if that \
          agrees.\n",
         exp.repetitions.max()
     );
     say!(
-        "| series | settings | old median (s) | new median (s) | new / old [95% CI] | verdict | measured again: new / old \
+        "| series | settings | old median (s) | new median (s) | old / new [95% CI] | verdict | measured again: old / new \
          [95% CI], verdict | output |"
     );
     say!("|---|---|---|---|---|---|---|---|");
@@ -309,11 +311,12 @@ mod tests {
     #[test]
     fn only_a_significant_single_thread_slowdown_beyond_the_minimum_effect_regresses() {
         let e = |value, lo, hi| Estimate { value, lo, hi };
-        assert_eq!(Speed::of(&e(1.2, 1.15, 1.25), 0.1, true), Speed::Regressed);
-        assert_eq!(Speed::of(&e(1.2, 1.15, 1.25), 0.1, false), Speed::SlowerNotGating);
-        assert_eq!(Speed::of(&e(1.05, 1.02, 1.08), 0.1, true), Speed::Unchanged, "within the minimum effect");
-        assert_eq!(Speed::of(&e(1.2, 0.95, 1.4), 0.1, true), Speed::Unchanged, "not significant");
-        assert_eq!(Speed::of(&e(0.8, 0.75, 0.85), 0.1, true), Speed::Improved);
+        // Old / new: 1/1.2 = the new build takes 1.2× the old time.
+        assert_eq!(Speed::of(&e(1.0 / 1.2, 0.8, 0.87), 0.1, true), Speed::Regressed);
+        assert_eq!(Speed::of(&e(1.0 / 1.2, 0.8, 0.87), 0.1, false), Speed::SlowerNotGating);
+        assert_eq!(Speed::of(&e(1.0 / 1.05, 0.92, 0.98), 0.1, true), Speed::Unchanged, "within the minimum effect");
+        assert_eq!(Speed::of(&e(1.0 / 1.2, 0.7, 1.05), 0.1, true), Speed::Unchanged, "not significant");
+        assert_eq!(Speed::of(&e(1.25, 1.18, 1.33), 0.1, true), Speed::Improved);
     }
 
     #[test]

@@ -1,8 +1,8 @@
 //! `harness ab`: the trustworthy comparison on a noisy machine. Builds another git revision, then times every
 //! configuration with both builds in one job, interleaved (A B, then B A, round after round), each run in a
-//! fresh `harness worker` process, and reports each configuration's time ratio new/old: the median of the per-round
-//! ratios with its 95% interval, by the statistic the reports and the CI gate use for rounds
-//! ([`report::RoundRatios::estimate`]: every round is a pair of processes of its own, so it resamples rounds as the
+//! fresh `harness worker` process, and reports each configuration's time ratio old/new (above 1: the new build is
+//! faster): the median of the per-round ratios with its 95% interval, by the statistic the reports and the CI gate
+//! use for rounds ([`report::RoundRatios::estimate`]: every round is a pair of processes of its own, so it resamples rounds as the
 //! processes they are). Both builds must give the same answers, run after run. A configuration the base revision
 //! cannot run (a setting newer than it, or a request its worker refuses) is skipped and listed.
 //!

@@ -61,7 +61,7 @@ fn ab_against_head_reports_ratios_near_one() {
     let cell = out.lines().find(|l| l.starts_with("| default")).unwrap().split('|').nth(5).unwrap().to_string();
     let numbers: Vec<f64> =
         cell.split(|c: char| !(c.is_ascii_digit() || c == '.')).filter_map(|n| n.parse().ok()).collect();
-    let [ratio, lo, hi] = numbers[..] else { panic!("new / old [lo, hi] in {cell:?}") };
+    let [ratio, lo, hi] = numbers[..] else { panic!("old / new [lo, hi] in {cell:?}") };
     assert!(ratio > 0.0 && lo <= ratio && ratio <= hi, "{cell}");
     // The second time, HEAD's binary is cached.
     let short = dir.join("short.toml");
