@@ -190,6 +190,9 @@ fn run_command(args: &RunArgs) -> Result<(), Error> {
         std::fs::create_dir_all(&dir).map_err(|e| Error::Input(format!("{}: cannot create: {e}", dir.display())))?;
         slurm::write_json(&dir.join(slurm::SHARD_JSON), &info)?;
     }
+    for mesh in plan.mesh_summaries()? {
+        note!("mesh {mesh}");
+    }
     run::sweep(&exp, &plan, &dir, existing)?;
     if let Some((i, n)) = shard
         && plan.runs.is_empty()
@@ -353,6 +356,9 @@ fn validate_command(args: &ValidateArgs) -> Result<(), Error> {
         .collect();
     say!("{}: ok", exp.path.display());
     say!("configurations {} ({})", plan.configurations.len(), series.join(", "));
+    for mesh in plan.mesh_summaries()? {
+        say!("mesh           {mesh}");
+    }
     let each = match exp.repetitions {
         Repetitions::Fixed(n) => format!("{n} repetitions each"),
         Repetitions::Auto { min, max, target_width } => {

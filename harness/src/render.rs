@@ -118,8 +118,10 @@ pub fn run(args: &RenderArgs) -> Result<(), Error> {
 
     let stats = built.structure.stats();
     let (count, what) = match &scene {
-        SceneData::Spheres(s) => (s.spheres.len(), "spheres"),
-        SceneData::Triangles(t) => (t.mesh.triangle_count(), "triangles"),
+        SceneData::Spheres(s) => (s.spheres.len(), "spheres".to_string()),
+        SceneData::Triangles(t) => {
+            (t.mesh.triangle_count(), format!("triangles ({} degenerate)", crate::meshes::degenerate(&t.mesh)))
+        }
     };
     say!("scene        {count} {what}, fingerprint {:016x}", scene.fingerprint());
     say!("settings     {}", describe(&settings));

@@ -31,10 +31,10 @@ pub fn fetch(name: &str) -> Result<(), Error> {
     fetch::fetch(&cache::root()?, DataSet::named(name)?).map(|_| ())
 }
 
-/// The mesh of an `.obj` or `.ply` file, or of a folder of `.ply` files.
+/// The mesh of an `.obj` or `.ply` file, or of a folder of `.ply` files; one without a triangle is bad input.
 pub fn load_path(path: &Path) -> Result<Mesh, Error> {
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
-    match ext.as_deref() {
+    let mesh = match ext.as_deref() {
         _ if path.is_dir() => ply::load_folder(path),
         Some("obj") => obj::load(path),
         Some("ply") => ply::load(path),
@@ -42,7 +42,41 @@ pub fn load_path(path: &Path) -> Result<Mesh, Error> {
             "{}: not a mesh (allowed: an .obj or .ply file, a folder of .ply files)",
             path.display()
         ))),
+    }?;
+    if mesh.indices.is_empty() {
+        return Err(Error::Input(format!(
+            "{}: no triangles (allowed: a mesh of at least one triangle: faces of an .obj, a .ply's face element)",
+            path.display()
+        )));
     }
+    Ok(mesh)
+}
+
+/// Triangles of `mesh` with zero area (two corners the same, or all three on one line), in f64 so that a tiny
+/// triangle does not count. They stay in the mesh, as every backend gets it; no ray hits them.
+pub fn degenerate(mesh: &Mesh) -> usize {
+    let at = |i: u32| {
+        let p = mesh.positions[i as usize];
+        [f64::from(p.x), f64::from(p.y), f64::from(p.z)]
+    };
+    let zero_area = |&[a, b, c]: &[u32; 3]| {
+        let (a, b, c) = (at(a), at(b), at(c));
+        let (u, v) = ([b[0] - a[0], b[1] - a[1], b[2] - a[2]], [c[0] - a[0], c[1] - a[1], c[2] - a[2]]);
+        let n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+        n == [0.0; 3]
+    };
+    mesh.indices.iter().filter(|t| zero_area(t)).count()
+}
+
+/// The load summary of the mesh the `mesh` setting names: `SOURCE: N triangles (D degenerate), fingerprint F`.
+pub fn summary(source: &str) -> Result<String, Error> {
+    let mesh = load_source(source)?;
+    Ok(format!(
+        "{source}: {} triangles ({} degenerate), fingerprint {:016x}",
+        mesh.triangle_count(),
+        degenerate(&mesh),
+        mesh.fingerprint()
+    ))
 }
 
 /// The data sets whose up axis is z (the sionna-rt city scenes, Mitsuba scenes with z up); every other mesh, and

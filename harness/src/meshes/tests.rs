@@ -116,6 +116,40 @@ fn loader_errors_are_one_line_naming_the_file() {
     }
 }
 
+/// An empty OBJ, one of vertices only, a PLY of zero faces, a folder of such: no triangles, refused in one line.
+#[test]
+fn a_mesh_without_triangles_is_refused() {
+    let dir = temp("empty");
+    let no_faces = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+        element face 0\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+    std::fs::create_dir_all(dir.join("folder")).unwrap();
+    write(&dir.join("folder"), "a.ply", no_faces);
+    let paths = [
+        write(&dir, "empty.obj", b""),
+        write(&dir, "points.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\n"),
+        write(&dir, "no-faces.ply", no_faces),
+        dir.join("folder"),
+    ];
+    for path in paths {
+        let e = load_path(&path).unwrap_err();
+        let line = e.to_string();
+        let says = format!("{}: no triangles (allowed: a mesh of at least one triangle", path.display());
+        assert!(line.starts_with(&says) && !line.contains('\n') && e.exit_code() == 2, "{line}");
+    }
+}
+
+/// Zero-area triangles (a repeated corner, three corners on a line) count as degenerate; a tiny one does not.
+#[test]
+fn degenerate_triangles_are_counted() {
+    let dir = temp("degenerate");
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nv 1e-20 0 0\nv 0 1e-20 0\n\
+               f 1 2 3\nf 1 2 4\nf 1 1 3\nf 1 5 6\n";
+    let mesh = load_path(&write(&dir, "d.obj", obj.as_bytes())).unwrap();
+    assert_eq!((mesh.triangle_count(), super::degenerate(&mesh)), (4, 2));
+    let tetra = load_path(&write(&dir, "t.ply", &tetra_ply(false))).unwrap();
+    assert_eq!(super::degenerate(&tetra), 0);
+}
+
 #[test]
 fn js_arrays_load_positions_and_cells() {
     let dir = temp("js");

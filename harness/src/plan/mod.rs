@@ -209,6 +209,21 @@ impl Plan {
         Ok(Plan { configurations, runs, sphere_file, notes, shard: None, sample_s: exp.sample_s })
     }
 
+    /// The load summary of every mesh the configurations name ([`crate::meshes::summary`]), in first-use order:
+    /// its triangles, how many are degenerate, its fingerprint. Planning loaded them, so this reads them again
+    /// from memory.
+    pub fn mesh_summaries(&self) -> Result<Vec<String>, Error> {
+        let mut sources: Vec<&str> = Vec::new();
+        for c in &self.configurations {
+            if let (SceneName::Mesh, Some(m)) = (c.settings.scene, &c.settings.mesh)
+                && !sources.contains(&m.0.as_str())
+            {
+                sources.push(&m.0);
+            }
+        }
+        sources.into_iter().map(crate::meshes::summary).collect()
+    }
+
     /// Drops the runs of the configurations whose backend cannot run here (Embree absent, a SIMD kernel this CPU
     /// lacks), so one config runs on every machine kind, with a note per reason for the report. With
     /// `require_all`, what could be installed is bad input instead; nothing left to run is bad input too.

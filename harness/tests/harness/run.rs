@@ -219,6 +219,66 @@ fn bad_configs_exit_2_with_one_line_and_write_nothing() {
     assert_eq!(o.status.code(), Some(2), "clap errors exit 2 too");
 }
 
+/// A mesh without a triangle (an empty OBJ, a PLY of zero faces) is refused like other bad input by `run`,
+/// `validate` and `render`: one line naming the file, exit 2, nothing written. A mesh with degenerate triangles
+/// runs, and its load summary counts them.
+#[test]
+fn a_mesh_without_triangles_is_refused_and_degenerate_ones_are_counted() {
+    let dir = temp("empty-mesh");
+    std::fs::write(dir.join("empty.obj"), "").unwrap();
+    let no_faces = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+                    element face 0\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+    std::fs::write(dir.join("no-faces.ply"), no_faces).unwrap();
+    let out_dir = dir.join("out");
+    for mesh in ["empty.obj", "no-faces.ply"] {
+        let path = dir.join(mesh);
+        let cfg = dir.join("empty.toml");
+        let text =
+            format!("name = \"t\"\n[sweep]\nscene = \"mesh\"\nmesh = \"{}\"\nworkload = \"primary\"\n", path.display());
+        std::fs::write(&cfg, text).unwrap();
+        let png = dir.join("out.png");
+        let set_mesh = format!("mesh={}", path.display());
+        for args in [
+            vec!["run", cfg.to_str().unwrap(), "--out", out_dir.to_str().unwrap()],
+            vec!["validate", cfg.to_str().unwrap()],
+            vec!["render", "--set", "scene=mesh", "--set", &set_mesh, "--out", png.to_str().unwrap()],
+        ] {
+            let o = harness().args(&args).output().unwrap();
+            let err = stderr(&o);
+            assert_eq!(o.status.code(), Some(2), "{mesh} {}: {err}", args[0]);
+            assert_eq!(err.trim_end().lines().count(), 1, "{mesh} {}: one line: {err}", args[0]);
+            let line = format!("{}: no triangles (allowed: a mesh of at least one triangle", path.display());
+            assert!(err.contains(&line), "{mesh} {}: expected {line:?} in {err}", args[0]);
+            assert!(!out_dir.exists() && !png.exists(), "{mesh} {}: nothing written", args[0]);
+        }
+    }
+    // Two triangles, one of zero area (its corners on a line): counted where the mesh's load is summarized.
+    let obj = dir.join("degenerate.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\n").unwrap();
+    let cfg = dir.join("degenerate.toml");
+    let text = format!(
+        "name = \"t\"\nrepetitions = 1\n[sweep]\nscene = \"mesh\"\nmesh = \"{}\"\nworkload = \"primary\"\n\
+         width = 8\nheight = 8\n",
+        obj.display()
+    );
+    std::fs::write(&cfg, text).unwrap();
+    let summary = format!("{}: 2 triangles (1 degenerate), fingerprint ", obj.display());
+    let o = harness().args(["validate", cfg.to_str().unwrap()]).output().unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.contains(&format!("mesh           {summary}")), "{out}");
+    let o = harness().args(["run", cfg.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]).output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains(&format!("mesh {summary}")), "{}", stderr(&o));
+    let o = harness()
+        .args(["render", "--set", "scene=mesh", "--set", &format!("mesh={}", obj.display())])
+        .args(["--set", "width=8", "--set", "height=8", "--out", dir.join("d.png").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("scene        2 triangles (1 degenerate), fingerprint"));
+}
+
 /// The wide BVH through a whole run: validated exact against brute force, with the kernel that ran recorded
 /// (`scalar` when asked, `auto` as the best this CPU has); a kernel this CPU lacks is refused before anything runs.
 #[test]
