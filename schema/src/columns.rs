@@ -265,6 +265,10 @@ declare_columns! {
         /// Runs of one process share its offset (the layout its memory happened to get), so the intervals resample
         /// processes, not runs, where a series was timed in several. 0 for untimed runs and in earlier rows.
         process_id: u32, Provenance = 0, added 13;
+        /// Primitives of the scene as traced: spheres, or triangles (a mesh's as loaded, degenerate ones included;
+        /// a tessellated or random-triangle scene's as made), for every backend. 0 in rows recorded before this
+        /// column (their size was implied by `objects` and `scene_fingerprint` only).
+        primitives: u64, Counter, added 14;
     }
 }
 

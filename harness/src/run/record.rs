@@ -129,6 +129,7 @@ fn validated(r: &Recording, state: &ConfigurationState, v: &Findings, started: S
     row.series = c.series.clone();
     row.repetition_rule = state.repetition_rule.clone();
     row.rays = w.rays;
+    row.primitives = v.primitives;
     row.nodes_per_ray = nodes;
     row.box_tests_per_ray = boxes;
     row.prim_tests_per_ray = prims;
@@ -203,6 +204,7 @@ mod tests {
                 wrong_side: WrongSide::Backend,
             },
             rays: 786_432,
+            primitives: 1000,
         };
         let provenance = Provenance::collect();
         let recording = Recording { exp: &exp, provenance: &provenance, shard: None };
@@ -213,6 +215,7 @@ mod tests {
         assert_eq!((row.validation, row.mismatches), (ValidationStatus::Failed, 3));
         assert_eq!((row.grazing, row.reference_checked, row.wrong_side), (2, 16_384, WrongSide::Backend));
         assert_eq!((row.ties, row.leaks), (4, 5));
+        assert_eq!(row.primitives, 1000, "a rejected row records its scene's size too");
         let text = format!("{}\n{}", schema::row::header(), schema::row::csv_line(&row).unwrap());
         let back = &schema::row::read_rows(&text).unwrap()[0];
         let metrics =

@@ -27,6 +27,8 @@ pub struct Findings {
     /// Mismatches, tolerated disagreements by kind, the reference's own check and whose answers were wrong.
     pub judged: Judgement,
     pub rays: usize,
+    /// The scene's primitives (spheres or triangles) as traced.
+    pub primitives: u64,
 }
 
 /// A planned configuration after validation: cleared for timing, or rejected (recorded once, never timed).
@@ -72,13 +74,15 @@ pub fn validate(plan: &Plan, c: &Configuration, bank: &mut RayBank) -> Result<Va
     let (counters, output_hash, answers) = counted(settings, &scene, rays.as_deref(), answer_rays)?;
     let Some((reference, answers)) = reference.zip(answers) else {
         let (judged, status) = (Judgement::default(), ValidationStatus::Unchecked);
-        let findings = Findings { status, counters, output_hash, reference: "-", judged, rays: 0 };
+        let primitives = scene.primitives() as u64;
+        let findings = Findings { status, counters, output_hash, reference: "-", judged, rays: 0, primitives };
         return Ok(Validation::Validated { findings, rays });
     };
     let judged = reference.judge(&answers);
     let exact = judged.mismatches == 0;
     let status = if exact { ValidationStatus::Exact } else { ValidationStatus::Failed };
+    let (rays_judged, primitives) = (reference.set.rays.len(), scene.primitives() as u64);
     let findings =
-        Findings { status, counters, output_hash, reference: reference.name, judged, rays: reference.set.rays.len() };
+        Findings { status, counters, output_hash, reference: reference.name, judged, rays: rays_judged, primitives };
     Ok(if exact { Validation::Validated { findings, rays } } else { Validation::Rejected(findings) })
 }
