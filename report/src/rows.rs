@@ -99,6 +99,9 @@ pub struct Rows {
     pub runs: Vec<Run>,
     /// Rows of configurations that failed validation (never timed; kept out of `frame` and `runs`).
     pub failed: Vec<Run>,
+    /// The columns the file's header has: an older row format lacks the columns added since, which `frame` and
+    /// `runs` hold at their defaults.
+    pub recorded: std::collections::BTreeSet<String>,
 }
 
 impl Rows {
@@ -122,7 +125,9 @@ pub fn read(path: &Path) -> Result<Rows, Error> {
         rows.into_iter().partition(|r| r.validation == schema::ValidationStatus::Failed);
     let runs: Vec<Run> = timed.into_iter().map(Run::new).collect();
     let frame = frame(&runs).map_err(|e| Error::read(path, e))?;
-    Ok(Rows { frame, runs, failed: failed.into_iter().map(Run::new).collect() })
+    let header = text.lines().next().unwrap_or_default().split(',');
+    let recorded = header.map(|c| c.trim().trim_matches('"').to_string()).collect();
+    Ok(Rows { frame, runs, failed: failed.into_iter().map(Run::new).collect(), recorded })
 }
 
 /// The polars frame of `runs`: every schema column, typed as declared.

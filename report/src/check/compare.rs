@@ -293,9 +293,9 @@ fn experiments(rows: &Rows) -> BTreeSet<String> {
     rows.runs.iter().chain(&rows.failed).map(|r| r.text(column::experiment).to_string()).collect()
 }
 
-/// Whether the file has `column`.
+/// Whether the file's header has `column` (a counter added since an older file was recorded is not compared).
 fn has_column(rows: &Rows, column: &str) -> bool {
-    rows.frame.schema().get(column).is_some()
+    rows.recorded.contains(column)
 }
 
 /// Per configuration id, its run with the smallest repetition index.
