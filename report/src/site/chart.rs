@@ -54,6 +54,9 @@ pub struct SiteChart {
     pub marks: Vec<SiteMarks>,
     /// Dashed vertical lines (change points).
     pub rules: Vec<f64>,
+    /// The least relative span of the y axis (0: fit the data): a history axis shows at least its gate's width, so
+    /// a change far below it is not drawn at full height.
+    pub min_span: f64,
 }
 
 impl SiteChart {

@@ -166,6 +166,8 @@ fn track_page(pair: &[Track], commits: &[CommitEntry]) -> String {
                 rings,
             ],
             rules,
+            // At least four times the regression gate's rise: a 0.006% change stays a flat line.
+            min_span: 4.0 * commits::REGRESSION,
             ..SiteChart::default()
         };
         body.push_str(&chart.element(&format!("chart-{k}")));
@@ -265,6 +267,8 @@ fn speedup_chart(h: &SpeedupHistory, commits: &[CommitEntry]) -> SiteChart {
             SiteMarks { label: "change point (new level from here)".into(), mark: "ring", points: rings },
         ],
         rules,
+        // At least four times the regression threshold's drop around the middle of the speedups.
+        min_span: 4.0 * history::REGRESSION,
         ..SiteChart::default()
     }
 }

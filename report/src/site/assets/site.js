@@ -20,6 +20,11 @@
 
   // A tick label: as `fmt`, without trailing zeros.
   function tickLabel(v) {
+    // Large whole numbers (instruction counts) read in thousands, millions, billions: 100M, not 100000000.
+    const units = [[1e9, "G"], [1e6, "M"], [1e3, "k"]];
+    for (const [u, suffix] of units) {
+      if (Math.abs(v) >= 10 * u) return tickLabel(v / u) + suffix;
+    }
     const text = fmt(v);
     return text.includes(".") && !text.includes("e") ? text.replace(/\.?0+$/, "") : text;
   }
@@ -81,10 +86,17 @@
   }
 
   // The extent of values (positive ones only on a log axis), padded.
-  function extent(values, log, pad) {
+  // `minSpan`: the least relative span the axis shows (e.g. 0.04: ±2% around the middle), so that a change of a
+  // few parts per million is not drawn at full height.
+  function extent(values, log, pad, minSpan) {
     let v = values.filter((x) => x !== null && isFinite(x) && (!log || x > 0));
     if (v.length === 0) v = log ? [1, 10] : [0, 1];
     let lo = Math.min(...v), hi = Math.max(...v);
+    const mid = (lo + hi) / 2;
+    if (minSpan && mid > 0 && hi - lo < minSpan * mid) {
+      lo = mid * (1 - minSpan / 2);
+      hi = mid * (1 + minSpan / 2);
+    }
     if (log) {
       if (lo === hi) { lo /= 2; hi *= 2; }
       const f = Math.pow(hi / lo, pad);
@@ -167,7 +179,7 @@
       const ticked = spec.x_ticks.length > 0;
       if (ticked) for (const [x] of spec.x_ticks) xs.push(x);
       const [x0, x1] = ticked ? [Math.min(...xs) - 0.5, Math.max(...xs) + 0.5] : extent(xs, state.logX, 0.04);
-      const [y0, y1] = extent(ys, state.logY, 0.06);
+      const [y0, y1] = extent(ys, state.logY, 0.06, spec.min_span);
       const top = MARGIN.top, bottom = HEIGHT - MARGIN.bottom;
       const Y = scale(y0, y1, state.logY, bottom, top);
       // The plot starts right of the widest y tick label and the y axis title beside it, so neither overlaps.
