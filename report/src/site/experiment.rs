@@ -184,6 +184,38 @@ pub fn context(exp: &Experiment) -> String {
     parts.join("; ")
 }
 
+/// Whether today's code still gives the result set's deterministic columns, from its newest reproduction with the
+/// code of a later commit (`harness reproduce DIR --at HEAD [--quick]`, folder `*-head*`); `None` when never checked.
+pub fn still_holds(exp: &Experiment) -> Option<(bool, String)> {
+    let (_, r) = exp.reproductions.iter().filter(|(name, _)| name.contains("-head")).max_by(|a, b| a.0.cmp(&b.0))?;
+    let commit = r.reproduced_origin.commits.first().map_or("?", |c| reproduction::short_commit(c));
+    let identical = r.differences.is_empty() && r.configurations_compared > 0;
+    let text = if r.configurations_compared == 0 {
+        format!("not checked at {commit}: no configuration both ran")
+    } else if identical {
+        format!(
+            "HEAD {commit} gives its deterministic columns: identical at {} configurations",
+            r.configurations_compared
+        )
+    } else {
+        format!(
+            "HEAD {commit} no longer gives its deterministic columns: {} differences at {} configurations compared",
+            r.differences.len(),
+            r.configurations_compared
+        )
+    };
+    Some((identical, text))
+}
+
+/// [`still_holds`] as a badge and its words, or a note that it was never checked.
+pub fn still_holds_html(exp: &Experiment) -> String {
+    match still_holds(exp) {
+        Some((true, text)) => format!("<span class=\"verdict holds\">still holds</span> {}", escape(&text)),
+        Some((false, text)) => format!("<span class=\"verdict fails\">moved</span> {}", escape(&text)),
+        None => "<span class=\"verdict inconclusive\">not re-checked</span> never reproduced with later code".into(),
+    }
+}
+
 fn provenance(exp: &Experiment) -> String {
     let list = |values: Vec<String>| values.iter().map(|v| escape(v)).collect::<Vec<_>>().join("<br>");
     let mut html = String::from("<dl class=\"provenance\">\n");
@@ -191,6 +223,7 @@ fn provenance(exp: &Experiment) -> String {
     html.push_str(&format!("<dt>commit</dt><dd>{}</dd>\n", list(exp.distinct(column::git_commit))));
     html.push_str(&format!("<dt>rustc</dt><dd>{}</dd>\n", list(exp.distinct(column::rustc))));
     html.push_str(&format!("<dt>context</dt><dd>{}</dd>\n", escape(&context(exp))));
+    html.push_str(&format!("<dt>at HEAD</dt><dd>{}</dd>\n", still_holds_html(exp)));
     html.push_str(&format!(
         "<dt>runs</dt><dd>{} timed{}</dd>\n",
         exp.rows.runs.len(),

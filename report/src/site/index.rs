@@ -3,7 +3,7 @@
 
 use schema::column;
 
-use super::experiment::{Experiment, context, headline_html, inline_code};
+use super::experiment::{Experiment, context, headline_html, inline_code, still_holds_html};
 use super::html::{escape, page};
 use crate::spec::Verdict;
 
@@ -46,18 +46,19 @@ pub fn page_of(experiments: &[Experiment]) -> String {
     for (i, exp) in lead.iter().enumerate() {
         body.push_str(&format!(
             "<section class=\"lead\" id=\"{name}\">\n<h2><a href=\"{}\">{name}</a> {}</h2>\n{}<p class=\"constant\">{}; \
-             {}</p>\n</section>\n",
+             {}<br>{}</p>\n</section>\n",
             escape(&exp.page()),
             claim_counts(exp),
             headline_html(exp, i < GRIDS),
             escape(&context(exp)),
             escape(&exp.machines().join(", ")),
+            still_holds_html(exp),
             name = escape(&exp.name),
         ));
     }
     body.push_str(
         "<h2>Every other experiment</h2>\n<table class=\"experiments\"><thead><tr><th>experiment</th><th>claims</th>\
-         <th>answer</th><th>commit</th></tr></thead><tbody>\n",
+         <th>answer</th><th>recorded at</th><th>at HEAD</th></tr></thead><tbody>\n",
     );
     for exp in experiments.iter().filter(|e| !LEAD.contains(&e.name.as_str())) {
         let answer = match &exp.headline {
@@ -65,7 +66,7 @@ pub fn page_of(experiments: &[Experiment]) -> String {
             None => inline_code(&exp.spec.description),
         };
         body.push_str(&format!(
-            "<tr><td><a href=\"{}\">{}</a></td><td>{}</td><td>{answer}</td><td>{}</td></tr>\n",
+            "<tr><td><a href=\"{}\">{}</a></td><td>{}</td><td>{answer}</td><td>{}</td><td>{}</td></tr>\n",
             escape(&exp.page()),
             escape(&exp.name),
             claim_counts(exp),
@@ -74,6 +75,7 @@ pub fn page_of(experiments: &[Experiment]) -> String {
                 .map(|c| escape(&c[..c.len().min(7)]))
                 .collect::<Vec<_>>()
                 .join(", "),
+            still_holds_html(exp),
         ));
     }
     body.push_str("</tbody></table>\n");
