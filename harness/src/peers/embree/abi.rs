@@ -325,6 +325,13 @@ pub type FnGetDeviceLastErrorMessage = unsafe extern "C" fn(device: RTCDevice) -
 /// `rtcSetDeviceErrorFunction`.
 pub type FnSetDeviceErrorFunction =
     unsafe extern "C" fn(device: RTCDevice, function: Option<RTCErrorFunction>, user: *mut c_void);
+/// `RTCMemoryMonitorFunction`: `bool (*)(void* userPtr, ssize_t bytes, bool post)`: called with `+bytes` before
+/// Embree allocates and `-bytes` after it frees; returning `false` cancels the allocation. `ssize_t` is `isize` on
+/// every target the harness builds for (LP64 Linux), and C's `bool` is Rust's `bool` (one byte, 0 or 1).
+pub type RTCMemoryMonitorFunction = unsafe extern "C" fn(user: *mut c_void, bytes: isize, post: bool) -> bool;
+/// `rtcSetDeviceMemoryMonitorFunction`.
+pub type FnSetDeviceMemoryMonitorFunction =
+    unsafe extern "C" fn(device: RTCDevice, function: Option<RTCMemoryMonitorFunction>, user: *mut c_void);
 /// `rtcGetDeviceProperty`.
 pub type FnGetDeviceProperty = unsafe extern "C" fn(device: RTCDevice, property: u32) -> isize;
 /// `rtcNewScene`.

@@ -2,7 +2,8 @@
 
 use std::ffi::{CStr, CString, c_char, c_void};
 use std::fmt;
-use std::sync::{Arc, Mutex};
+use std::sync::atomic::{AtomicI64, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
 
 pub use schema::EmbreeQuality;
 use serde::{Deserialize, Serialize};
@@ -96,6 +97,12 @@ pub(super) struct DeviceInner {
     pub(super) raw: RTCDevice,
     /// The last error the callback reported; boxed so its address (the callback's user pointer) is stable.
     errors: Box<Mutex<Option<String>>>,
+    /// Bytes Embree holds on this device (allocations net of frees), kept by [`monitor_memory`], registered once
+    /// per device; boxed so its address (the callback's user pointer) is stable.
+    memory: Box<AtomicI64>,
+    /// Held around every change to the device's memory that a measurement reads (a scene's build, a scene's
+    /// release), so that one scene's measured bytes are not another's.
+    measuring: Mutex<()>,
     pub(super) info: DeviceInfo,
 }
 
@@ -109,6 +116,16 @@ impl DeviceInner {
     /// Takes the error the callback captured since the last call, if any.
     pub(super) fn take_error(&self) -> Option<String> {
         self.errors.lock().unwrap_or_else(|e| e.into_inner()).take()
+    }
+
+    /// Bytes Embree's memory monitor reports the device holds now (allocations net of frees).
+    pub(super) fn memory_bytes(&self) -> i64 {
+        self.memory.load(Ordering::SeqCst)
+    }
+
+    /// Holds off other scenes' builds and releases on this device while one is measured.
+    pub(super) fn measuring(&self) -> MutexGuard<'_, ()> {
+        self.measuring.lock().unwrap_or_else(|e| e.into_inner())
     }
 }
 
@@ -129,6 +146,17 @@ unsafe extern "C" fn capture_error(user: *mut c_void, code: u32, message: *const
     // SAFETY: `user` is the `Mutex` boxed in `DeviceInner`, alive as long as the device.
     let slot = unsafe { &*(user as *const Mutex<Option<String>>) };
     *slot.lock().unwrap_or_else(|e| e.into_inner()) = Some(format!("{} (code {code})", text.trim()));
+}
+
+/// Embree's memory monitor (`RTCMemoryMonitorFunction`): adds `bytes` (+ before an allocation, − after a free)
+/// to the device's counter and allows every allocation. Embree calls it from its TBB build threads at once, hence
+/// the atomic; it cannot panic, so nothing unwinds into C.
+unsafe extern "C" fn monitor_memory(user: *mut c_void, bytes: isize, _post: bool) -> bool {
+    // SAFETY: `user` is the `AtomicI64` boxed in `DeviceInner`, alive as long as the device (released in its Drop,
+    // before the box is freed).
+    let counter = unsafe { &*(user as *const AtomicI64) };
+    counter.fetch_add(bytes as i64, Ordering::SeqCst);
+    true
 }
 
 /// An Embree device (cheap to clone: all clones share one device).
@@ -195,7 +223,14 @@ impl EmbreeDevice {
             native_packet,
             tasking,
         };
-        let inner = DeviceInner { lib, raw, errors: Box::new(Mutex::new(None)), info };
+        let inner = DeviceInner {
+            lib,
+            raw,
+            errors: Box::new(Mutex::new(None)),
+            memory: Box::new(AtomicI64::new(0)),
+            measuring: Mutex::new(()),
+            info,
+        };
         if !(40000..50000).contains(&v) {
             return Err(EmbreeError::Api(format!(
                 "{} is Embree {}, not Embree 4",
@@ -205,6 +240,11 @@ impl EmbreeDevice {
         let user = &*inner.errors as *const Mutex<Option<String>> as *mut c_void;
         // SAFETY: the callback matches RTCErrorFunction; `user` stays valid until the device is released.
         unsafe { (api.set_device_error_function)(raw, Some(capture_error), user) };
+        let user = &*inner.memory as *const AtomicI64 as *mut c_void;
+        // SAFETY: the callback matches RTCMemoryMonitorFunction (checked against the ABI notes) and is thread safe;
+        // `user` stays valid until the device is released. Registered before any scene exists, so every
+        // allocation of the device's scenes is counted.
+        unsafe { (api.set_device_memory_monitor_function)(raw, Some(monitor_memory), user) };
         Ok(Self { inner: Arc::new(inner) })
     }
 

@@ -26,7 +26,7 @@ pub trait EmbreeGeometry {
     const TYPE: u32;
     /// Primitives in `input` (none: the scene is committed empty, no geometry attached).
     fn count(input: &Self::Input) -> usize;
-    /// Bytes of the buffers handed to Embree.
+    /// Bytes of the input as Embree's buffers hold it (the least [`EmbreeScene::input_bytes`] can be).
     fn bytes(input: &Self::Input) -> usize;
     /// Fills the buffers of a new geometry of type [`EmbreeGeometry::TYPE`] from `input`.
     fn fill(geometry: &mut NewGeometry<'_>, input: &Self::Input) -> Result<(), EmbreeError>;
@@ -123,8 +123,11 @@ pub struct EmbreeScene<G> {
     scene: RTCScene,
     /// Primitives in the geometry.
     count: usize,
-    /// Bytes of the buffers handed to Embree.
+    /// Bytes Embree allocated during `rtcCommitScene`, net of what it freed by the end of it (its memory monitor):
+    /// the acceleration structure, nodes and leaves with their triangle or sphere copies, not the input buffers.
     bytes: usize,
+    /// Bytes Embree allocated for the geometry's input buffers before the commit.
+    input_bytes: usize,
     geometry: PhantomData<fn() -> G>,
 }
 
@@ -149,6 +152,7 @@ impl<G: EmbreeGeometry> std::fmt::Debug for EmbreeScene<G> {
 
 impl<G> Drop for EmbreeScene<G> {
     fn drop(&mut self) {
+        let _measuring = self.device.measuring();
         // SAFETY: `scene` came from rtcNewScene and is released once; the device outlives it (we hold an Arc).
         unsafe { (self.device.lib.api.release_scene)(self.scene) };
     }
@@ -189,6 +193,9 @@ impl<G: EmbreeGeometry> EmbreeScene<G> {
     pub fn build(device: &EmbreeDevice, input: &G::Input, quality: EmbreeQuality) -> Result<Self, EmbreeError> {
         let inner = device.inner.clone();
         let api = inner.lib.api;
+        // No other scene of this device is built or released until the measurement is taken (released before
+        // `this` can drop: its Drop takes the same lock).
+        let guard = device.inner.measuring();
         inner.take_error();
         // SAFETY: a live device.
         let scene = unsafe { (api.new_scene)(inner.raw) };
@@ -197,21 +204,37 @@ impl<G: EmbreeGeometry> EmbreeScene<G> {
             return Err(EmbreeError::Api(why));
         }
         // From here on `Drop` releases the scene on every path.
-        let this = Self { device: inner, scene, count: G::count(input), bytes: G::bytes(input), geometry: PhantomData };
-        // SAFETY: a live scene and enum values from the headers.
-        unsafe {
-            (api.set_scene_build_quality)(scene, super::device::build_quality(quality));
-            (api.set_scene_flags)(scene, RTC_SCENE_FLAG_NONE);
-        }
-        if this.count > 0 {
-            this.attach(input)?;
-        }
-        // SAFETY: a live scene; this is the BVH build.
-        unsafe { (api.commit_scene)(scene) };
-        match this.device.take_error() {
-            Some(why) => Err(EmbreeError::Api(why)),
-            None => Ok(this),
-        }
+        let mut this =
+            Self { device: inner, scene, count: G::count(input), bytes: 0, input_bytes: 0, geometry: PhantomData };
+        let measured = (|| {
+            // SAFETY: a live scene and enum values from the headers.
+            unsafe {
+                (api.set_scene_build_quality)(scene, super::device::build_quality(quality));
+                (api.set_scene_flags)(scene, RTC_SCENE_FLAG_NONE);
+            }
+            let start = this.device.memory_bytes();
+            if this.count > 0 {
+                this.attach(input)?;
+            }
+            let committing = this.device.memory_bytes();
+            // SAFETY: a live scene; this is the BVH build.
+            unsafe { (api.commit_scene)(scene) };
+            let committed = this.device.memory_bytes();
+            if let Some(why) = this.device.take_error() {
+                return Err(EmbreeError::Api(why));
+            }
+            let bytes = |from: i64, to: i64| usize::try_from(to - from).unwrap_or(0);
+            Ok((bytes(start, committing), bytes(committing, committed)))
+        })();
+        drop(guard);
+        (this.input_bytes, this.bytes) = measured?;
+        Ok(this)
+    }
+
+    /// Bytes Embree allocated for its own copies of the input (the buffers of `rtcSetNewGeometryBuffer`), before
+    /// the commit: not part of [`Accelerator::stats`]'s bytes.
+    pub fn input_bytes(&self) -> usize {
+        self.input_bytes
     }
 
     /// Creates a geometry of type `G`, fills it from `input`, commits it and attaches it to the scene.
@@ -337,7 +360,9 @@ impl<G> Accelerator for EmbreeScene<G> {
         r.tfar == f32::NEG_INFINITY
     }
 
-    /// Embree does not expose its tree: only the input bytes are known (nodes, depth and SAH report 0).
+    /// Embree does not expose its tree (nodes, depth and SAH report 0); its bytes are what its memory monitor saw
+    /// `rtcCommitScene` allocate net of frees: nodes and leaves (with Embree's copies of the primitives), not the
+    /// input buffers, which were allocated before the commit.
     fn stats(&self) -> TreeStats {
         TreeStats { nodes: 0, leaves: 0, depth: 0, bytes: self.bytes, sah_cost: 0.0 }
     }
