@@ -155,7 +155,16 @@ declare_columns! {
         tree_leaves: u64, Counter;
         /// Depth of the built structure.
         tree_depth: u64, Counter;
-        /// Bytes of the built structure.
+        /// Bytes of the built structure as traversal holds it: its nodes and its leaves' primitive data (copies or
+        /// index arrays it owns), never the scene's input. Ours: the node array plus the leaf layout (flat BVH:
+        /// primitive copies and scene indices; wide BVH: leaf blocks, primitive copies with their indices, padding
+        /// lanes included; pointer BVH: boxed nodes and primitives; list: the primitives). Embree: what its memory
+        /// monitor saw `rtcCommitScene` allocate net of what it freed (nodes, leaves with its triangle copies,
+        /// allocator slack), not its copies of the input buffers, made before the commit (so sphere leaves' points,
+        /// read from that copy, are not counted); rows before #62 held the input's bytes. tinybvh: plain layout,
+        /// nodes, index array and its 48-byte-a-triangle soup; BVH4/BVH8_CPU, the 64-byte blocks traversal reads
+        /// (nodes, leaf triangles, primitive ids), not the intermediate trees it keeps. obvhs: nodes, primitive
+        /// index array and its primitive copies in tree order.
         tree_bytes: u64, Counter, unit "bytes";
         /// SAH cost of the built structure (unit traversal and intersection costs).
         sah_cost: f64, Counter, decimals 6;
