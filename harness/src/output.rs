@@ -143,8 +143,7 @@ impl Progress {
     pub fn update(&mut self, runs: &[f64]) {
         let (scale, validation) = (self.model_scale(), self.validation_ratio());
         let (mut count, mut seconds) = (0.0, 0.0);
-        for config in 0..self.model.len() {
-            let r = runs[config];
+        for (config, &r) in runs[..self.model.len()].iter().enumerate() {
             if r > 0.0 {
                 let run = self.run_seconds(config, scale);
                 count += r;
