@@ -239,7 +239,13 @@ pub fn plot(history_dir: &Path) -> Result<Vec<PathBuf>, Error> {
                 let (series, point) = (track.series.clone(), track.point.clone());
                 changes.push(Change { series, point, run, speedup, found: *found });
             }
-            lines.push(Line { label: format!("{} {}", track.series, track.point), style: i, colour: None, points });
+            lines.push(Line {
+                label: format!("{} {}", track.series, track.point),
+                style: i,
+                colour: None,
+                front: false,
+                points,
+            });
         }
         changes.sort_by_key(|c| c.run);
         let mut rules: Vec<f64> = changes.iter().map(|c| c.run as f64 - 0.5).collect();
@@ -259,6 +265,7 @@ pub fn plot(history_dir: &Path) -> Result<Vec<PathBuf>, Error> {
                 },
             ],
             rules,
+            categorical: false,
         };
         let chart = Chart {
             title: format!("{experiment}: speedups over the appended runs"),

@@ -5,7 +5,8 @@
 //! whose every filled cell is coloured by its verdict (above their figures), every ratio cell on the index and the
 //! lead pages is green exactly where its interval lies above 1 (one direction: above 1 = ours faster), each leads
 //! with its headline, the index's first screen shows Munich's ambient-occlusion cell, matrix headers stay in view, chart titles and legends stay clear of
-//! the plot (and axis titles of tick labels), and no page's screenshot is blank. Skipped without chromium, unless
+//! the plot (and axis titles of tick labels), the series of a chart differ in colour or marker and each keeps its look
+//! on every chart of a page, a chart over workloads joins no points, and no page's screenshot is blank. Skipped without chromium, unless
 //! `BVHLAB_REQUIRE_BROWSER=1` (CI).
 
 use std::fs::File;
@@ -308,7 +309,7 @@ fn the_site_of_the_committed_results_works_in_a_browser() {
 
     let (series, objects, median) = known_point(&results);
     browser.open(&url("builds.html"));
-    let selector = format!("figure[data-source=\"chart-0\"] circle.pt[data-series=\"{series}\"][data-x=\"{objects}\"]");
+    let selector = format!("figure[data-source=\"chart-0\"] .pt[data-series=\"{series}\"][data-x=\"{objects}\"]");
     let centre = browser.eval(&format!(
         "(() => {{ const p = document.querySelector('{selector}'); p.scrollIntoView({{block: 'center'}});
             const r = p.getBoundingClientRect(); return [r.x + r.width / 2, r.y + r.height / 2]; }})()"
@@ -381,6 +382,45 @@ fn the_site_of_the_committed_results_works_in_a_browser() {
     assert_eq!(sticky[1], json!("sticky"), "meshes.html: {sticky}");
     assert_eq!(sticky[2], json!("sticky"), "meshes.html: {sticky}");
     assert_ne!(sticky[3], json!("auto"), "meshes.html: the matrix scrolls in a box of its own ({sticky})");
+
+    // Series tell apart by colour or marker (as in the PNG figures), each series looks the same in every chart of a
+    // page, and a category axis (workloads) draws points with intervals, no lines between categories.
+    for page in ["meshes", "peers"] {
+        browser.open(&url(&format!("{page}.html")));
+        let seen = browser.eval(
+            "(() => { const looks = {}, same = [], categorical = [];
+                for (const f of document.querySelectorAll('figure.chart')) {
+                    const spec = JSON.parse(document.getElementById(f.dataset.source).textContent);
+                    const charted = {};
+                    for (const p of f.querySelectorAll('.pt')) {
+                        const look = p.getAttribute('fill') + ' ' + p.dataset.marker;
+                        charted[p.dataset.series] = look;
+                        (looks[p.dataset.series] = looks[p.dataset.series] || new Set()).add(look);
+                    }
+                    const names = Object.keys(charted);
+                    for (const a of names) for (const b of names) if (a < b && charted[a] === charted[b]) same.push(a + ' = ' + b);
+                    if (spec.categorical) categorical.push([f.querySelectorAll('path.line').length, f.querySelectorAll('.pt').length]);
+                }
+                const wide = ['ours-wide', 'ours-wide-binned'].map(s => looks[s] ? Array.from(looks[s]).join() : null);
+                const varying = Object.entries(looks).filter(([, l]) => l.size > 1).map(([s, l]) => s + ': ' + Array.from(l));
+                return [same, varying, categorical, wide]; })()",
+        );
+        assert_eq!(seen[0], json!([]), "{page}.html: series drawn alike on one chart");
+        assert_eq!(seen[1], json!([]), "{page}.html: a series drawn differently on two charts");
+        if page == "meshes" {
+            let categorical = seen[2].as_array().unwrap();
+            assert!(!categorical.is_empty(), "meshes.html: no chart over workloads ({seen})");
+            for c in categorical {
+                assert!(
+                    c[0] == json!(0) && c[1].as_u64() > Some(0),
+                    "meshes.html: a category chart joins its points ({c})"
+                );
+            }
+            let wide = seen[3].as_array().unwrap();
+            assert!(wide[0].is_string() && wide[1].is_string() && wide[0] != wide[1], "meshes.html: {seen}");
+        }
+        eprintln!("{page}.html: every series one look, told apart on each chart; category charts {}", seen[2]);
+    }
 
     // The head-to-head pages lead with the answer: a ratio matrix coloured by verdict, above their figures.
     for page in ["meshes", "peers"] {

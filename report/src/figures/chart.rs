@@ -23,6 +23,21 @@ const PALETTE: [RGBColor; 8] = [
     RGBColor(127, 127, 127),
 ];
 
+/// The palette's colour of style `style`, as RGB.
+pub fn palette(style: usize) -> (u8, u8, u8) {
+    let RGBColor(r, g, b) = PALETTE[style % PALETTE.len()];
+    (r, g, b)
+}
+
+/// The markers' names, by style index (`style % MARKERS.len()`), as [`marker`] draws them and `site.js` knows them:
+/// seven, so that with the palette's eight colours a style's colour and marker repeat together only after 56.
+pub const MARKERS: [&str; 7] = ["circle", "triangle", "square", "diamond", "triangle-down", "cross", "plus"];
+
+/// The name of style `style`'s marker.
+pub fn marker_name(style: usize) -> &'static str {
+    MARKERS[style % MARKERS.len()]
+}
+
 /// A point: x, y and y's 95% interval.
 #[derive(Clone, Copy, Debug)]
 pub struct ChartPoint {
@@ -40,17 +55,25 @@ pub struct Line {
     pub style: usize,
     /// A colour of its own instead of the style's (e.g. its backend family's), as RGB.
     pub colour: Option<(u8, u8, u8)>,
+    /// Drawn over the others (a peer's series over ours).
+    pub front: bool,
     pub points: Vec<ChartPoint>,
 }
 
 impl Line {
     /// The colour it is drawn in: its own, else its style's.
     pub fn rgb(&self) -> (u8, u8, u8) {
-        self.colour.unwrap_or_else(|| {
-            let RGBColor(r, g, b) = PALETTE[self.style % PALETTE.len()];
-            (r, g, b)
-        })
+        self.colour.unwrap_or_else(|| palette(self.style))
     }
+}
+
+/// The order lines are drawn in, last on top: the front ones (peers) over the others, and within each group the
+/// first in legend order on top (Embree's single rays over its packets), so that a line that overlaps another of its
+/// group stays visible.
+pub fn drawing_order(front: &[bool]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..front.len()).rev().collect();
+    order.sort_by_key(|&i| front[i]); // stable: reversed legend order within each group
+    order
 }
 
 /// Everything one figure shows.
@@ -78,6 +101,9 @@ pub struct Overlay {
     pub marks: Vec<Marks>,
     /// Dashed vertical lines at these x values, across the whole plot.
     pub rules: Vec<f64>,
+    /// The x axis is a category (a word column such as `workload`): points with their intervals, not joined by
+    /// lines (there is nothing between two categories).
+    pub categorical: bool,
 }
 
 /// Points drawn with one mark and one legend entry.
@@ -264,7 +290,8 @@ where
 }
 
 /// Tick values for a log axis over [lo, hi] (lo > 0): 1-2-5 per decade over few decades, fewer
-/// over many, every integer multiple when that leaves fewer than three; `light`: grid lines (1..9).
+/// over many, every integer multiple when that leaves fewer than three, and linear steps when even those are
+/// fewer than three (a narrow range within one decade); `light`: grid lines (1..9).
 fn log_ticks(lo: f64, hi: f64, light: bool) -> Vec<f64> {
     let (first, last) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
     let in_range = |multipliers: &[f64]| -> Vec<f64> {
@@ -283,7 +310,11 @@ fn log_ticks(lo: f64, hi: f64, light: bool) -> Vec<f64> {
         4..=5 => &[1.0, 3.0],
         _ => &[1.0],
     });
-    if ticks.len() < 3 { in_range(&all) } else { ticks }
+    if ticks.len() >= 3 {
+        return ticks;
+    }
+    let all = in_range(&all);
+    if all.len() >= 3 { all } else { RangedCoordf64::from(lo..hi).key_points(6) }
 }
 
 /// The axis range for `values`, padded; positive only on log axes, from zero on linear y axes.
@@ -318,9 +349,10 @@ pub fn tick(v: f64) -> String {
     if text.contains('.') { text.trim_end_matches('0').trim_end_matches('.').to_string() } else { text }
 }
 
-/// A marker outline around (0, 0) in pixels: circle-like, triangle, square, diamond, inverted triangle.
+/// A marker outline around (0, 0) in pixels, by [`MARKERS`]: circle-like, triangle, square, diamond, inverted
+/// triangle, × and +.
 fn marker(kind: usize) -> Vec<(i32, i32)> {
-    match kind % 5 {
+    match kind % MARKERS.len() {
         0 => (0..12)
             .map(|i| {
                 let a = i as f64 * std::f64::consts::TAU / 12.0;
@@ -330,7 +362,35 @@ fn marker(kind: usize) -> Vec<(i32, i32)> {
         1 => vec![(0, -7), (7, 5), (-7, 5)],
         2 => vec![(-5, -5), (5, -5), (5, 5), (-5, 5)],
         3 => vec![(0, -7), (7, 0), (0, 7), (-7, 0)],
-        _ => vec![(0, 7), (7, -5), (-7, -5)],
+        4 => vec![(0, 7), (7, -5), (-7, -5)],
+        5 => vec![
+            (-5, -7),
+            (0, -2),
+            (5, -7),
+            (7, -5),
+            (2, 0),
+            (7, 5),
+            (5, 7),
+            (0, 2),
+            (-5, 7),
+            (-7, 5),
+            (-2, 0),
+            (-7, -5),
+        ],
+        _ => vec![
+            (-2, -7),
+            (2, -7),
+            (2, -2),
+            (7, -2),
+            (7, 2),
+            (2, 2),
+            (2, 7),
+            (-2, 7),
+            (-2, 2),
+            (-7, 2),
+            (-7, -2),
+            (-2, -2),
+        ],
     }
 }
 
@@ -468,7 +528,8 @@ where
             .map_err(e)?;
     }
 
-    for line in &chart.lines {
+    let front: Vec<bool> = chart.lines.iter().map(|l| l.front).collect();
+    for line in drawing_order(&front).into_iter().map(|i| &chart.lines[i]) {
         let (r, g, b) = line.rgb();
         let colour = RGBColor(r, g, b);
         let stroke = colour.stroke_width(2);
@@ -482,7 +543,9 @@ where
                 .map(|at| EmptyElement::at(at) + PathElement::new([(-6, 0), (6, 0)], stroke)),
         )
         .map_err(e)?;
-        cc.draw_series(LineSeries::new(line.points.iter().map(|p| (p.x, p.y)), stroke)).map_err(e)?;
+        if !overlay.categorical {
+            cc.draw_series(LineSeries::new(line.points.iter().map(|p| (p.x, p.y)), stroke)).map_err(e)?;
+        }
         cc.draw_series(
             line.points.iter().map(|p| EmptyElement::at((p.x, p.y)) + Polygon::new(shape.clone(), colour.filled())),
         )
@@ -536,6 +599,7 @@ mod tests {
                 label: format!("flat-sah-front-to-back-{s} objects 1000000 (threads 1)"),
                 style: s,
                 colour: None,
+                front: false,
                 points: (1..=8)
                     .map(|x| {
                         let y = 1.0 + (s * 7 + x * 3) as f64 % 20.0;
@@ -567,6 +631,7 @@ mod tests {
                 },
             ],
             rules: vec![2.5],
+            categorical: false,
         }
     }
 
@@ -672,5 +737,6 @@ mod tests {
         assert_eq!(log_ticks(0.2, 0.45, false), [0.2, 0.3, 0.4]);
         assert_eq!(log_ticks(1.0, 1e7, false), [1.0, 10.0, 100.0, 1e3, 1e4, 1e5, 1e6, 1e7]);
         assert_eq!(log_ticks(8.0, 21.0, true), [8.0, 9.0, 10.0, 20.0]);
+        assert!(log_ticks(1.05, 1.8, false).len() >= 3, "{:?}", log_ticks(1.05, 1.8, false));
     }
 }

@@ -67,25 +67,33 @@ fn family(accel: &str) -> usize {
     }
 }
 
-/// Each series' colour when `series` span more than one backend family (a hue per family, a shade per variant in
-/// legend order), else none: a figure of our own variants keeps the palette's distinct colours.
-fn family_colours(runs: &[crate::rows::Run], series: &[&str]) -> Vec<Option<(u8, u8, u8)>> {
-    let families: Vec<usize> = series
-        .iter()
-        .map(|s| runs.iter().find(|r| r.series() == *s).map_or(0, |r| family(r.text(column::accel))))
-        .collect();
-    if families.iter().all(|f| *f == families[0]) {
-        return vec![None; series.len()];
-    }
-    let mut seen = [0usize; 4];
-    families
-        .iter()
-        .map(|&f| {
-            let shades = FAMILY_SHADES[f];
-            seen[f] += 1;
-            Some(shades[(seen[f] - 1) % shades.len()])
-        })
-        .collect()
+/// How a series looks in every figure of an experiment (and on its site page): its colour, marker (style index) and
+/// whether it is drawn over the others.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Look {
+    pub colour: (u8, u8, u8),
+    pub style: usize,
+    /// A peer's series (Embree, tinybvh, obvhs): drawn on top of ours.
+    pub front: bool,
+}
+
+/// The look of `series`, by its label alone, so that it is the same in every chart of the experiment: its position in
+/// the experiment's legend order gives its marker; its colour is its backend family's (a hue per family, a shade per
+/// variant in legend order) when the experiment's series span more than one family, else the palette's by position.
+pub(crate) fn look(rows: &Rows, spec: &ReportSpec, series: &str) -> Look {
+    let family_of = |s: &str| rows.runs.iter().find(|r| r.series() == s).map_or(0, |r| family(r.text(column::accel)));
+    let position = spec.series.iter().position(|s| s == series).unwrap_or(spec.series.len());
+    let families: Vec<usize> = spec.series.iter().map(|s| family_of(s)).collect();
+    let f = family_of(series);
+    let mixed = families.iter().chain([&f]).any(|g| *g != f);
+    let colour = if mixed {
+        let shades = FAMILY_SHADES[f];
+        let variant = families[..position.min(families.len())].iter().filter(|g| **g == f).count();
+        shades[variant % shades.len()]
+    } else {
+        chart::palette(position)
+    };
+    Look { colour, style: position, front: f != 0 }
 }
 
 /// What a plot shows, as chart data with each point's provenance.
@@ -96,10 +104,10 @@ pub(crate) fn figure_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Figu
     let runs: Vec<crate::rows::Run> = rows.runs.iter().filter(|r| r.passes(&plot.filter)).cloned().collect();
     let categories = if plot.kind == PlotKind::TradeOff { None } else { pool::categories(&runs, &plot.x) };
     let series = plotted_series(spec, plot);
-    let colours = family_colours(&runs, &series);
     let mut lines = Vec::new();
     let mut provenance = Vec::new();
-    for (series, colour) in series.into_iter().zip(colours) {
+    for series in series {
+        let look = look(rows, spec, series);
         let curves: Vec<Curve> = match (plot.kind, reference) {
             _ if !metric_ok => Vec::new(),
             (PlotKind::Metric, _) => pool::metric_curves(&runs, series, &plot.x, &plot.y),
@@ -114,8 +122,8 @@ pub(crate) fn figure_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Figu
             (_, None) => Vec::new(),
         };
         let per = |p: &Point| if plot.kind == PlotKind::Efficiency { p.threads } else { 1.0 };
-        let single = curves.len() == 1;
-        for curve in curves.into_iter().filter(|c| !c.points.is_empty()) {
+        // The curves of one series (e.g. at 1 and at all threads) share its colour and differ in marker.
+        for (k, curve) in curves.into_iter().filter(|c| !c.points.is_empty()).enumerate() {
             let points: Vec<ChartPoint> = curve
                 .points
                 .iter()
@@ -126,12 +134,10 @@ pub(crate) fn figure_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Figu
                     hi: p.estimate.hi / per(p),
                 })
                 .collect();
-            // A series drawn as one line keeps its config position: the same look in every figure.
-            let position = spec.series.iter().position(|s| s == series).filter(|_| single);
-            let style = position.unwrap_or(spec.series.len() + lines.len());
             let label = if curve.fixed.is_empty() { series.to_string() } else { format!("{series} ({})", curve.fixed) };
             provenance.push(curve.points.iter().map(|p| p.provenance.clone()).collect());
-            lines.push(Line { label, style, colour, points });
+            let (colour, style, front) = (Some(look.colour), look.style + k, look.front);
+            lines.push(Line { label, style, colour, front, points });
         }
     }
     // On a category axis the lines sit side by side within each category, so that their intervals do not hide
@@ -144,19 +150,24 @@ pub(crate) fn figure_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Figu
             line.points.iter_mut().for_each(|p| p.x += offset);
         }
         overlay.x_ticks = values.iter().enumerate().map(|(i, v)| ((i + 1) as f64, v.clone())).collect();
+        overlay.categorical = true;
     }
     let reference = reference.unwrap_or("reference");
+    // Axis titles in words: "embree-high's trace time / series' (above 1: faster than embree-high)".
+    let quantity = quantity(&plot.y);
     let (y_label, guide) = match plot.kind {
         PlotKind::Metric | PlotKind::TradeOff => (metric_label(&plot.y), None),
-        PlotKind::Speedup if is_time(&plot.y) => {
-            (format!("speedup in {} vs {reference} (×)", plot.y), Some((1.0, format!("same as {reference}"))))
-        }
+        PlotKind::Speedup if is_time(&plot.y) => (
+            format!("{reference}'s {quantity} / series' (above 1: faster than {reference})"),
+            Some((1.0, format!("same as {reference}"))),
+        ),
         PlotKind::Speedup => {
-            (format!("{} ratio, {reference} / series (×)", plot.y), Some((1.0, format!("same as {reference}"))))
+            (format!("{reference}'s {quantity} / series'"), Some((1.0, format!("same as {reference}"))))
         }
-        PlotKind::Efficiency => {
-            (format!("efficiency: speedup in {} vs {reference} / threads", plot.y), Some((1.0, "ideal".to_string())))
-        }
+        PlotKind::Efficiency => (
+            format!("{reference}'s {quantity} / series' / threads (1: ideal scaling)"),
+            Some((1.0, "ideal".to_string())),
+        ),
     };
     let title = if lines.is_empty() { format!("{} (no data)", plot.title) } else { plot.title.clone() };
     let x_label = if plot.kind == PlotKind::TradeOff { metric_label(&plot.x) } else { axis_label(&plot.x) };
@@ -183,6 +194,15 @@ fn metric_label(name: &str) -> String {
         column::sah_cost => "SAH cost".into(),
         column::tree_bytes => "tree size (bytes)".into(),
         other => other.replace('_', " "),
+    }
+}
+
+/// What a metric measures, in words and without its unit: "trace time".
+fn quantity(name: &str) -> String {
+    let label = metric_label(name);
+    match label.find(" (") {
+        Some(at) if label.ends_with(')') => label[..at].to_string(),
+        _ => label,
     }
 }
 

@@ -2,7 +2,7 @@
 
 use serde::Serialize;
 
-use crate::figures::chart::Chart;
+use crate::figures::chart::{Chart, marker_name};
 
 /// One point: x, y with its interval, the tooltip's lines and an optional link.
 #[derive(Clone, Debug, Serialize)]
@@ -27,6 +27,11 @@ pub struct SiteLine {
     /// A colour of its own (`#rrggbb`, e.g. its backend family's) instead of the style's.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub colour: Option<String>,
+    /// Its marker, as in the PNG figures (`circle`, `triangle`, `square`, `diamond`, `triangle-down`, `cross`,
+    /// `plus`).
+    pub marker: &'static str,
+    /// Drawn over the others (a peer's series over ours).
+    pub front: bool,
     pub points: Vec<SitePoint>,
 }
 
@@ -57,9 +62,16 @@ pub struct SiteChart {
     /// The least relative span of the y axis (0: fit the data): a history axis shows at least its gate's width, so
     /// a change far below it is not drawn at full height.
     pub min_span: f64,
+    /// The x axis is a category (a word column): points with intervals, side by side, not joined by lines.
+    pub categorical: bool,
 }
 
 impl SiteChart {
+    /// A series' line: its marker from its style, as the PNG figures draw it.
+    pub fn line(label: String, style: usize, points: Vec<SitePoint>) -> SiteLine {
+        SiteLine { label, style, colour: None, marker: marker_name(style), front: false, points }
+    }
+
     /// The chart of a report figure, each point's tooltip from `tip(line, point)`.
     pub fn of(chart: &Chart, tip: impl Fn(usize, usize) -> Vec<String>) -> SiteChart {
         let lines = chart
@@ -70,6 +82,8 @@ impl SiteChart {
                 label: line.label.clone(),
                 style: line.style,
                 colour: line.colour.map(|(r, g, b)| format!("#{r:02x}{g:02x}{b:02x}")),
+                marker: marker_name(line.style),
+                front: line.front,
                 points: line
                     .points
                     .iter()

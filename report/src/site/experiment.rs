@@ -423,6 +423,7 @@ pub fn charts(exp: &Experiment) -> Vec<SiteChart> {
                 ]
             });
             site.x_ticks = ticks.clone();
+            site.categorical = figure.overlay.categorical;
             site
         })
         .collect()

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use super::chart::{SiteChart, SiteLine, SiteMarks, SitePoint};
+use super::chart::{SiteChart, SiteMarks, SitePoint};
 use super::html::{escape, num, page, slug};
 use crate::error::Error;
 use crate::history::change_points::ChangePoint;
@@ -155,7 +155,7 @@ fn track_page(pair: &[Track], commits: &[CommitEntry]) -> String {
             title: format!("{} instructions: {}", track.phase.name(), title),
             x_label: "commit (first-parent order)".into(),
             y_label: format!("{} instructions", track.phase.name()),
-            lines: vec![SiteLine { label: track.phase.name().into(), style: k, colour: None, points }],
+            lines: vec![SiteChart::line(track.phase.name().into(), k, points)],
             x_ticks: commits.iter().enumerate().map(|(i, c)| (i as f64, short(&c.commit))).collect(),
             marks: vec![
                 SiteMarks {
@@ -249,7 +249,7 @@ fn speedup_chart(h: &SpeedupHistory, commits: &[CommitEntry]) -> SiteChart {
                 }
             })
             .collect();
-        lines.push(SiteLine { label, style: i, colour: None, points });
+        lines.push(SiteChart::line(label, i, points));
     }
     SiteChart {
         title: format!("{}: speedups over the appended runs", h.experiment),

@@ -190,7 +190,7 @@ fn golden_report() {
     assert!(
         std::fs::read_to_string(dir.join("figures/speedup.svg"))
             .unwrap()
-            .contains("speedup in total_s vs serial·list (×)")
+            .contains("serial·list&apos;s total time / series&apos; (above 1: faster than serial·list)")
     );
 
     // REPORT.md.

@@ -107,29 +107,63 @@
     return [lo - d, hi + d];
   }
 
+  // About `count` ticks at 1, 2 or 5 times a power of ten, never fewer than four (a finer step where they would be).
   function linearTicks(lo, hi, count) {
     const step0 = (hi - lo) / count;
     const p = Math.pow(10, Math.floor(Math.log10(step0)));
-    const step = [1, 2, 5, 10].map((m) => m * p).find((s) => s >= step0) || 10 * p;
-    const ticks = [];
-    for (let v = Math.ceil(lo / step) * step; v <= hi + step * 1e-9; v += step) ticks.push(Math.abs(v) < step * 1e-9 ? 0 : v);
-    return ticks;
+    const steps = [0.1, 0.2, 0.5, 1, 2, 5, 10].map((m) => m * p);
+    let k = steps.findIndex((s) => s >= step0);
+    if (k < 0) k = steps.length - 1;
+    for (; ; k--) {
+      const step = steps[k], ticks = [];
+      for (let v = Math.ceil(lo / step) * step; v <= hi + step * 1e-9; v += step) ticks.push(Math.abs(v) < step * 1e-9 ? 0 : v);
+      if (ticks.length >= 4 || k === 0) return ticks;
+    }
   }
 
+  // Ticks of an axis: a log axis labels 1, 2 and 5 of each decade over up to three decades (only the powers of ten
+  // over more), every whole multiple where that leaves fewer than four, and linear steps within a narrow range.
   function ticksOf(s, count) {
     if (!s.log) return linearTicks(s.lo, s.hi, count);
-    const ticks = [];
-    for (const mults of [[1], [1, 2, 5], [1, 2, 3, 4, 5, 6, 7, 8, 9]]) {
-      ticks.length = 0;
+    const decades = Math.log10(s.hi / s.lo);
+    const choices = decades > 3 ? [[1], [1, 2, 5], [1, 2, 3, 4, 5, 6, 7, 8, 9]] : [[1, 2, 5], [1, 2, 3, 4, 5, 6, 7, 8, 9]];
+    for (const mults of choices) {
+      const ticks = [];
       for (let e = Math.floor(Math.log10(s.lo)); e <= Math.ceil(Math.log10(s.hi)); e++) {
         for (const m of mults) {
           const v = m * Math.pow(10, e);
-          if (v >= s.lo && v <= s.hi) ticks.push(v);
+          if (v >= s.lo * (1 - 1e-9) && v <= s.hi * (1 + 1e-9)) ticks.push(v);
         }
       }
-      if (ticks.length >= 3) return ticks;
+      if (ticks.length >= 4) return ticks;
     }
-    return ticks.length >= 2 ? ticks : linearTicks(s.lo, s.hi, count);
+    return linearTicks(s.lo, s.hi, count).filter((v) => v > 0);
+  }
+
+  // A series' colour: its own (by its label, the same in every chart of the page), else its style's.
+  function colourOf(line) {
+    return line.colour || PALETTE[line.style % PALETTE.length];
+  }
+
+  // A marker's outline centred on (x, y), as the PNG figures draw it (report/src/figures/chart.rs, `marker`).
+  function markerPath(name, x, y) {
+    const poly = (pts) => "M" + pts.map(([a, b]) => (x + a).toFixed(1) + " " + (y + b).toFixed(1)).join("L") + "Z";
+    switch (name) {
+      case "triangle": return poly([[0, -6], [6, 4.5], [-6, 4.5]]);
+      case "square": return poly([[-4.5, -4.5], [4.5, -4.5], [4.5, 4.5], [-4.5, 4.5]]);
+      case "diamond": return poly([[0, -6], [6, 0], [0, 6], [-6, 0]]);
+      case "triangle-down": return poly([[0, 6], [6, -4.5], [-6, -4.5]]);
+      case "cross": return poly([[-4.5, -6.5], [0, -2], [4.5, -6.5], [6.5, -4.5], [2, 0], [6.5, 4.5], [4.5, 6.5], [0, 2], [-4.5, 6.5], [-6.5, 4.5], [-2, 0], [-6.5, -4.5]]);
+      case "plus": return poly([[-2, -6.5], [2, -6.5], [2, -2], [6.5, -2], [6.5, 2], [2, 2], [2, 6.5], [-2, 6.5], [-2, 2], [-6.5, 2], [-6.5, -2], [-2, -2]]);
+      default: return `M${(x - 5).toFixed(1)} ${y.toFixed(1)}a5 5 0 1 0 10 0a5 5 0 1 0 -10 0Z`;
+    }
+  }
+
+  // The order lines are drawn in, last on top (as the PNG figures): peers over ours, and within each the first in
+  // legend order on top, so that a line overlapping another of its group (Embree under its packets) stays visible.
+  function drawingOrder(lines) {
+    const order = lines.map((_, i) => i).reverse();
+    return order.filter((i) => !lines[i].front).concat(order.filter((i) => lines[i].front));
   }
 
   // One interactive chart in `figure`: title (wraps), log/linear buttons, the SVG plot, and the legend below it.
@@ -149,8 +183,10 @@
     spec.lines.forEach((line, i) => {
       const li = html("li", {}, legend);
       const b = html("button", { type: "button", class: "series", "data-line": i, title: "show or hide" }, li);
-      const swatch = html("span", { class: "swatch" }, b);
-      swatch.style.background = (line.colour || PALETTE[line.style % PALETTE.length]);
+      // The series' sample: its line (none on a category axis) and its marker, as drawn in the plot.
+      const swatch = svg("svg", { class: "swatch", width: 26, height: 14, viewBox: "0 0 26 14" }, b);
+      if (!spec.categorical) svg("line", { x1: 0, x2: 26, y1: 7, y2: 7, stroke: colourOf(line), "stroke-width": 2 }, swatch);
+      svg("path", { class: "marker", d: markerPath(line.marker, 13, 7), fill: colourOf(line), "data-marker": line.marker }, swatch);
       html("span", {}, b, line.label);
       b.addEventListener("click", () => {
         if (state.hidden.has(i)) state.hidden.delete(i); else state.hidden.add(i);
@@ -224,20 +260,27 @@
       }
       for (const r of spec.rules) svg("line", { class: "rule", x1: X(r), x2: X(r), y1: top, y2: bottom }, layer);
       const ok = (v, s) => v !== null && isFinite(v) && (!s.log || v > 0);
-      spec.lines.forEach((line, i) => {
-        if (state.hidden.has(i)) return;
-        const colour = (line.colour || PALETTE[line.style % PALETTE.length]);
+      const order = drawingOrder(spec.lines);
+      for (const i of order) {
+        const line = spec.lines[i];
+        if (state.hidden.has(i)) continue;
+        const colour = colourOf(line);
         const pts = line.points.filter((p) => ok(p.x, X) && ok(p.y, Y));
-        if (pts.length > 1) {
+        // A category axis (workloads, meshes) has nothing between its values: points with intervals, no line.
+        if (pts.length > 1 && !spec.categorical) {
           const d = pts.map((p, k) => (k ? "L" : "M") + X(p.x).toFixed(1) + " " + Y(p.y).toFixed(1)).join("");
           svg("path", { class: "line", d, stroke: colour }, layer);
         }
         for (const p of pts) {
           if (ok(p.lo, Y) && ok(p.hi, Y) && p.lo !== p.hi) {
-            svg("line", { class: "bar", x1: X(p.x), x2: X(p.x), y1: Y(p.lo), y2: Y(p.hi), stroke: colour }, layer);
+            const x = X(p.x);
+            svg("line", { class: "bar", x1: x, x2: x, y1: Y(p.lo), y2: Y(p.hi), stroke: colour }, layer);
+            if (spec.categorical) {
+              for (const v of [p.lo, p.hi]) svg("line", { class: "bar", x1: x - 4, x2: x + 4, y1: Y(v), y2: Y(v), stroke: colour }, layer);
+            }
           }
         }
-      });
+      }
       for (const m of spec.marks) {
         for (const [x, y] of m.points) {
           if (!ok(x, X) || !ok(y, Y)) continue;
@@ -246,18 +289,19 @@
         }
       }
       // Points last, on top, each hoverable (and a link where it has one).
-      spec.lines.forEach((line, i) => {
-        if (state.hidden.has(i)) return;
-        const colour = (line.colour || PALETTE[line.style % PALETTE.length]);
+      for (const i of order) {
+        const line = spec.lines[i];
+        if (state.hidden.has(i)) continue;
+        const colour = colourOf(line);
         line.points.forEach((p, k) => {
           if (!ok(p.x, X) || !ok(p.y, Y)) return;
           const parent = p.href ? svg("a", { href: p.href }, layer) : layer;
-          svg("circle", {
-            class: "pt", cx: X(p.x), cy: Y(p.y), r: 4, fill: colour,
+          svg("path", {
+            class: "pt", d: markerPath(line.marker, X(p.x), Y(p.y)), fill: colour, "data-marker": line.marker,
             "data-line": i, "data-point": k, "data-series": line.label, "data-x": p.x,
           }, parent);
         });
-      });
+      }
     }
     plot.addEventListener("mouseover", (ev) => {
       const t = ev.target;
