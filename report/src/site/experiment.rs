@@ -185,35 +185,35 @@ pub fn context(exp: &Experiment) -> String {
 }
 
 /// Whether today's code still gives the result set's deterministic columns, from its newest reproduction with the
-/// code of a later commit (`harness reproduce DIR --at HEAD [--quick]`, folder `*-head*`); `None` when never checked.
-pub fn still_holds(exp: &Experiment) -> Option<(bool, String)> {
-    let (_, r) = exp.reproductions.iter().filter(|(name, _)| name.contains("-head")).max_by(|a, b| a.0.cmp(&b.0))?;
+/// code of a later commit (`harness reproduce DIR --at HEAD [--quick]`, folder `*-head*`): `Some(true)` identical,
+/// `Some(false)` moved, `None` not told (never reproduced so, or no configuration both ran); with its words.
+pub fn still_holds(exp: &Experiment) -> (Option<bool>, String) {
+    let newest = exp.reproductions.iter().filter(|(name, _)| name.contains("-head")).max_by(|a, b| a.0.cmp(&b.0));
+    let Some((_, r)) = newest else { return (None, "never reproduced with later code".into()) };
     let commit = r.reproduced_origin.commits.first().map_or("?", |c| reproduction::short_commit(c));
-    let identical = r.differences.is_empty() && r.configurations_compared > 0;
-    let text = if r.configurations_compared == 0 {
-        format!("not checked at {commit}: no configuration both ran")
-    } else if identical {
-        format!(
-            "HEAD {commit} gives its deterministic columns: identical at {} configurations",
-            r.configurations_compared
-        )
+    if r.configurations_compared == 0 {
+        return (None, format!("not told at {commit}: its quick run shares no configuration with the recorded rows"));
+    }
+    if r.differences.is_empty() {
+        let n = r.configurations_compared;
+        (Some(true), format!("HEAD {commit} gives its deterministic columns: identical at {n} configurations"))
     } else {
-        format!(
-            "HEAD {commit} no longer gives its deterministic columns: {} differences at {} configurations compared",
-            r.differences.len(),
-            r.configurations_compared
+        let (d, n) = (r.differences.len(), r.configurations_compared);
+        (
+            Some(false),
+            format!("HEAD {commit} no longer gives its deterministic columns: {d} differences in {n} compared"),
         )
-    };
-    Some((identical, text))
+    }
 }
 
-/// [`still_holds`] as a badge and its words, or a note that it was never checked.
+/// [`still_holds`] as a badge and its words.
 pub fn still_holds_html(exp: &Experiment) -> String {
-    match still_holds(exp) {
-        Some((true, text)) => format!("<span class=\"verdict holds\">still holds</span> {}", escape(&text)),
-        Some((false, text)) => format!("<span class=\"verdict fails\">moved</span> {}", escape(&text)),
-        None => "<span class=\"verdict inconclusive\">not re-checked</span> never reproduced with later code".into(),
-    }
+    let (badge, text) = match still_holds(exp) {
+        (Some(true), text) => ("<span class=\"verdict holds\">still holds</span>", text),
+        (Some(false), text) => ("<span class=\"verdict fails\">moved</span>", text),
+        (None, text) => ("<span class=\"verdict inconclusive\">not re-checked</span>", text),
+    };
+    format!("{badge} {}", escape(&text))
 }
 
 fn provenance(exp: &Experiment) -> String {
