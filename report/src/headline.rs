@@ -218,7 +218,8 @@ impl Headline {
                 .map(|c| match *c {
                     column::threads => threads_words(cell.get(c)),
                     column::objects => format!("{} objects", cell.get(c)),
-                    _ => cell.get(c).to_string(),
+                    column::mesh | column::view | column::scene | column::workload => cell.get(c).to_string(),
+                    _ => format!("{c} {}", cell.get(c)), // a bare number or word needs its setting's name
                 })
                 .collect::<Vec<_>>()
                 .join(" · ")
