@@ -215,6 +215,11 @@ impl Headline {
         let row_axes: Vec<&str> = varying.iter().copied().filter(|c| !col_axes.contains(c)).collect();
         let label = |cell: &Cell, axes: &[&str]| {
             axes.iter()
+                .filter(|c| {
+                    let value = cell.get(c);
+                    let unset = matches!(value, "" | "-") || (**c == column::objects && value == "0");
+                    !unset // a mesh's "0 objects", a sphere scene's "-" mesh: nothing to say
+                })
                 .map(|c| match *c {
                     column::threads => threads_words(cell.get(c)),
                     column::objects => format!("{} objects", cell.get(c)),
