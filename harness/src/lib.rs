@@ -319,33 +319,12 @@ fn site_command(args: &SiteArgs) -> Result<(), Error> {
     Ok(())
 }
 
-/// What starting a worker process costs beyond its warm-up (exec, the request, the ray file read), in seconds.
-const WORKER_START_S: f64 = 0.02;
-
-/// The estimated wall time of `plan` when every configuration runs `repetitions` (its warm-ups besides): each run
-/// its cost model's time plus its sample (`sample_ms`: a run traces at least that long), and with `processes` above
-/// 1 each worker's start and warm-up (its scene, an untimed build and an untimed pass: about a run of one pass).
-fn estimate_with(exp: &Experiment, plan: &Plan, cores: usize, repetitions: u32) -> f64 {
-    let per_block = exp.repetitions.max().div_ceil(exp.processes.max(1)).max(1);
-    let planned: std::collections::BTreeSet<usize> = plan.runs.iter().map(|r| r.config).collect();
-    planned
-        .into_iter()
-        .map(|c| {
-            let run = plan::estimate_seconds(&plan.configurations[c].settings, cores);
-            let timed = (exp.warmups + repetitions) as f64 * (run + exp.sample_s);
-            let workers =
-                if exp.processes > 1 { repetitions.div_ceil(per_block) as f64 * (run + WORKER_START_S) } else { 0.0 };
-            timed + workers
-        })
-        .sum()
-}
-
 fn validate_command(args: &ValidateArgs) -> Result<(), Error> {
     let exp = load(&args.config, args.quick)?;
     let cores = plan::available_threads();
     let mut plan = Plan::new(&exp, cores)?;
     plan.skip_unavailable(&exp.path.display().to_string(), false)?;
-    let seconds_at = |repetitions: u32| estimate_with(&exp, &plan, cores, repetitions);
+    let seconds_at = |repetitions: u32| plan::plan_seconds(&exp, &plan, cores, repetitions);
     let series: Vec<String> = exp
         .series
         .iter()
@@ -394,6 +373,9 @@ fn validate_command(args: &ValidateArgs) -> Result<(), Error> {
             "estimate       ~{:.0} s on {cores} cores ({sampling}; rough cost model, within about 2x)",
             seconds_at(max)
         );
+    }
+    if seconds_at(max) > output::LONG_RUN_S {
+        say!("note           {}", output::long_run_warning(seconds_at(max)));
     }
     for n in &plan.notes {
         say!("note           {n}");

@@ -159,6 +159,9 @@ impl Progress {
             }
             None if first => {
                 note!("about {:.0} runs, estimated {} (cost model, within about 2x)", count, duration(seconds));
+                if seconds > LONG_RUN_S {
+                    note!("{}", long_run_warning(seconds));
+                }
                 self.last_line = Some(Instant::now());
             }
             None => {}
@@ -208,6 +211,18 @@ impl Progress {
         }
         note!("{} runs in {}", self.done, duration(self.started.elapsed().as_secs_f64()));
     }
+}
+
+/// Estimated wall time above which a run says before it starts that it will be long.
+pub const LONG_RUN_S: f64 = 3600.0;
+
+/// What a run estimated to take more than [`LONG_RUN_S`] says before it starts.
+pub fn long_run_warning(seconds: f64) -> String {
+    format!(
+        "this run will take over an hour (estimated {}); it can be stopped and resumed (`harness run` again with the \
+         same --out), cut with --quick, or split with --shard",
+        duration(seconds)
+    )
 }
 
 #[cfg(test)]

@@ -278,6 +278,11 @@ declare_columns! {
         /// a tessellated or random-triangle scene's as made), for every backend. 0 in rows recorded before this
         /// column (their size was implied by `objects` and `scene_fingerprint` only).
         primitives: u64, Counter, added 14;
+        /// Peak resident memory of the process that timed the run (Linux `getrusage`'s `ru_maxrss`), after the
+        /// run: a worker's (with `processes` above 1, and Embree always: its scene, rays and this backend's trees)
+        /// or the harness's own (every scene, reference and tree made so far). Empty where the system does not say
+        /// and in rows recorded before this column.
+        peak_rss_bytes: Option<f64>, Metric, unit "bytes", decimals 0, added 15;
     }
 }
 

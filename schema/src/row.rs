@@ -82,11 +82,11 @@ pub fn counter_names() -> Vec<&'static str> {
     names_of(Role::Counter)
 }
 
-/// The columns a plot's y or a claim may use: float metrics and float counters.
+/// The columns a plot's y or a claim may use: float metrics and numeric counters (e.g. `tree_bytes`).
 pub fn plottable_names() -> Vec<&'static str> {
     COLUMNS
         .iter()
-        .filter(|c| c.kind == Kind::Float && matches!(c.role, Role::Metric | Role::Counter))
+        .filter(|c| matches!(c.kind, Kind::Float | Kind::Int) && matches!(c.role, Role::Metric | Role::Counter))
         .map(|c| c.name)
         .collect()
 }

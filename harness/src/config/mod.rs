@@ -503,8 +503,12 @@ fn parse_plot(p: &Section<'_>, labels: &Labels, has_reference: bool) -> Result<P
     } else {
         let default_x = if kind == PlotKind::Efficiency { Axis::threads } else { Axis::objects };
         let x = p.string("x")?.unwrap_or(default_x.key()).to_string();
-        if Axis::from_key(&x).is_none() {
-            return Err(p.error("x", format!("unknown column {x:?} (allowed: {})", axis_keys())));
+        // A setting, or the scene's size as traced (a mesh's triangles: the axis of a sweep over data sets).
+        if Axis::from_key(&x).is_none() && x != schema::column::primitives {
+            return Err(p.error(
+                "x",
+                format!("unknown column {x:?} (allowed: {}, {})", axis_keys(), schema::column::primitives),
+            ));
         }
         x
     };

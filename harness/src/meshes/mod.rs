@@ -83,9 +83,10 @@ pub fn summary(source: &str) -> Result<String, Error> {
 /// every file, is taken as y up.
 pub const Z_UP: &[&str] = &["san-francisco", "munich", "florence", "etoile"];
 
-/// The up axis of the mesh the `mesh` setting names ([`Z_UP`]).
+/// The up axis of the mesh the `mesh` setting names ([`Z_UP`]; a tiling's is its model's).
 pub fn up_axis(source: &str) -> Vec3 {
-    if Z_UP.contains(&source) { Vec3::Z } else { Vec3::Y }
+    let model = tiling(source).map_or(source, |(model, _)| model);
+    if Z_UP.contains(&model) { Vec3::Z } else { Vec3::Y }
 }
 
 /// True when the `mesh` setting names a file or folder rather than a data set.
@@ -93,14 +94,43 @@ pub fn is_path(source: &str) -> bool {
     source.contains(['/', '\\']) || source.contains('.')
 }
 
-/// The mesh the `mesh` setting names — the fetched data set `source`, or the file or folder at that path — loaded
-/// once per process.
+/// Most copies a tiling may ask for (`munich*256` is 10 M triangles).
+pub const MAX_COPIES: u32 = 1024;
+
+/// `MODEL*N`: the model (a data set name or a path) and the copy count `N` of a tiling; `None` for a plain source.
+/// The count is not checked here ([`load_source`] refuses one out of range).
+fn tiling(source: &str) -> Option<(&str, &str)> {
+    let (model, copies) = source.rsplit_once('*')?;
+    (!copies.is_empty() && copies.bytes().all(|c| c.is_ascii_digit())).then_some((model, copies))
+}
+
+/// Triangles of the mesh `source` names without loading it: a data set's registered count (times a tiling's
+/// copies); `None` for a file or folder.
+pub fn triangles(source: &str) -> Option<usize> {
+    let (model, copies) = match tiling(source) {
+        Some((model, copies)) => (model, copies.parse::<usize>().ok()?),
+        None => (source, 1),
+    };
+    let set = registry::DATA_SETS.iter().find(|d| d.name == model)?;
+    Some(set.triangles * copies)
+}
+
+/// The mesh the `mesh` setting names — the fetched data set `source`, the file or folder at that path, or `MODEL*N`:
+/// `N` copies of either laid out as a city of varied blocks ([`tracer::scene::mesh::Mesh::tiled`]) — loaded once
+/// per process.
 pub fn load_source(source: &str) -> Result<Arc<Mesh>, Error> {
     static LOADED: Mutex<Option<HashMap<String, Arc<Mesh>>>> = Mutex::new(None);
     if let Some(mesh) = LOADED.lock().unwrap().get_or_insert_with(HashMap::new).get(source) {
         return Ok(mesh.clone());
     }
-    let mesh = Arc::new(if is_path(source) {
+    let mesh = Arc::new(if let Some((model, copies)) = tiling(source) {
+        let copies = copies.parse::<u32>().ok().filter(|n| (1..=MAX_COPIES).contains(n)).ok_or_else(|| {
+            Error::Input(format!(
+                "{source}: {copies} copies (allowed: MODEL*N with N from 1 to {MAX_COPIES}, e.g. munich*64)"
+            ))
+        })?;
+        load_source(model)?.tiled(copies, up_axis(model))
+    } else if is_path(source) {
         let path = Path::new(source);
         if !path.exists() {
             return Err(Error::Input(format!(
@@ -112,7 +142,7 @@ pub fn load_source(source: &str) -> Result<Arc<Mesh>, Error> {
         let Ok(set) = DataSet::named(source) else {
             let names: Vec<_> = registry::DATA_SETS.iter().map(|d| d.name).collect();
             return Err(Error::Input(format!(
-                "unknown data set {source:?} (allowed: {}, or an .obj/.ply file or a folder of .ply files)",
+                "unknown data set {source:?} (allowed: {}, an .obj/.ply file, a folder of .ply files, or MODEL*N: N copies of one)",
                 names.join(", ")
             )));
         };

@@ -190,3 +190,18 @@ fn fetches_the_bunny_for_real() {
     assert_eq!(m.triangles, 69_666);
     assert_eq!(cache::load(&root, set).unwrap().triangle_count(), 69_666);
 }
+
+#[test]
+fn model_star_n_is_n_copies_and_a_bad_count_is_refused() {
+    let dir = temp("tiled");
+    let one = write(&dir, "t.ply", &tetra_ply(true)).display().to_string();
+    let nine = super::load_source(&format!("{one}*9")).unwrap();
+    assert_eq!(nine.triangle_count(), 9 * super::load_source(&one).unwrap().triangle_count());
+    assert_eq!(super::up_axis("munich*64"), tracer::Vec3::Z);
+    assert_eq!(super::triangles("munich*64"), Some(64 * 38_936));
+    assert_eq!(super::triangles(&format!("{one}*9")), None);
+    for bad in ["*0", "*1025", "*99999999999"] {
+        let e = super::load_source(&format!("{one}{bad}")).unwrap_err().to_string();
+        assert!(e.contains("allowed: MODEL*N with N from 1 to 1024") && !e.contains('\n'), "{e}");
+    }
+}

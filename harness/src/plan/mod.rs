@@ -18,7 +18,7 @@ use crate::backend::{self, Unavailable};
 use crate::config::{Experiment, Series};
 use crate::error::Error;
 
-pub use estimate::estimate_seconds;
+pub use estimate::{estimate_seconds, plan_seconds, round_seconds};
 
 /// Logical cores available to this process: what `threads = "all"` means here ([`Threads::cores_here`]).
 pub fn available_threads() -> usize {

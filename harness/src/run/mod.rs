@@ -27,6 +27,8 @@ pub mod trial;
 pub mod validate;
 pub mod worker;
 
+pub use reference::{BRUTE_FORCE_MAX, checked_count};
+
 use std::path::Path;
 use std::time::Instant;
 
@@ -68,7 +70,7 @@ pub fn sweep(exp: &Experiment, plan: &Plan, dir: &Path, existing: Existing) -> R
         );
     }
     let cores = crate::plan::available_threads();
-    let model = plan.configurations.iter().map(|c| crate::plan::estimate_seconds(&c.settings, cores)).collect();
+    let model = plan.configurations.iter().map(|c| crate::plan::round_seconds(exp, &c.settings, cores)).collect();
     let mut progress = Progress::new(model);
     progress.update(&schedule.expected());
     let recording = Recording { exp, provenance: &provenance, shard: plan.shard };

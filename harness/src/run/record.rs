@@ -82,6 +82,7 @@ pub fn timed(
     row.sample_configs = t.sample_configs;
     row.steal_s = t.steal_s;
     row.process_id = t.process_id;
+    row.peak_rss_bytes = t.peak_rss_bytes;
     row.encode_s = metric(t.encode_s);
     row.total_s = metric(t.total_s());
     row.mrays_per_s = metric(t.trace_s).map(|trace_s| v.counters.rays as f64 / trace_s.max(1e-12) / 1e6);

@@ -48,6 +48,10 @@ pub struct Timing {
     /// workers.
     #[serde(default)]
     pub process_id: u32,
+    /// Peak resident memory of the process that timed it, in bytes, after the run ([`peak_rss_bytes`]); `None`
+    /// where the system does not say and in answers of earlier workers.
+    #[serde(default)]
+    pub peak_rss_bytes: Option<f64>,
     /// Image hash (render) or ray-set answer hash.
     pub output_hash: u64,
     pub scene_fingerprint: u64,
@@ -142,6 +146,7 @@ impl Trial {
             sample_configs,
             steal_s,
             process_id: std::process::id(),
+            peak_rss_bytes: peak_rss_bytes(),
             output_hash: output.hash(),
             scene_fingerprint: self.scene.fingerprint(),
             stats: self.built.structure.stats(),
@@ -149,6 +154,15 @@ impl Trial {
             simd_kernel: self.built.simd_kernel.to_string(),
         }
     }
+}
+
+/// This process's peak resident memory in bytes (`VmHWM` of `/proc/self/status`, Linux's `ru_maxrss`); `None`
+/// where there is no such file.
+pub fn peak_rss_bytes() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find_map(|l| l.strip_prefix("VmHWM:"))?;
+    let kib: f64 = line.trim().strip_suffix("kB")?.trim().parse().ok()?;
+    Some(kib * 1024.0)
 }
 
 /// A trial in this process with what it runs with, as [`sample`] takes it.
@@ -240,6 +254,7 @@ mod tests {
             sample_configs: 2,
             steal_s: Some(0.01),
             process_id: 4242,
+            peak_rss_bytes: None,
             output_hash: 0xdead_beef_0123_4567,
             scene_fingerprint: 42,
             stats: TreeStats { nodes: 7, leaves: 4, depth: 2, bytes: 1024, sah_cost: 3.5 },

@@ -96,6 +96,21 @@ pub(crate) fn look(rows: &Rows, spec: &ReportSpec, series: &str) -> Look {
     Look { colour, style: position, front: f != 0 }
 }
 
+/// The exponent `k` of the least-squares fit `y ∝ x^k` through a curve's medians on log-log axes (the growth
+/// a log-log figure shows); `None` with fewer than three positive points.
+pub fn growth_exponent(points: &[ChartPoint]) -> Option<f64> {
+    let logs: Vec<(f64, f64)> =
+        points.iter().filter(|p| p.x > 0.0 && p.y > 0.0).map(|p| (p.x.ln(), p.y.ln())).collect();
+    if logs.len() < 3 {
+        return None;
+    }
+    let n = logs.len() as f64;
+    let (mx, my) = (logs.iter().map(|p| p.0).sum::<f64>() / n, logs.iter().map(|p| p.1).sum::<f64>() / n);
+    let sxx: f64 = logs.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = logs.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
 /// What a plot shows, as chart data with each point's provenance.
 pub(crate) fn figure_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Figure {
     let bar = spec.bar();
@@ -134,7 +149,13 @@ pub(crate) fn figure_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Figu
                     hi: p.estimate.hi / per(p),
                 })
                 .collect();
-            let label = if curve.fixed.is_empty() { series.to_string() } else { format!("{series} ({})", curve.fixed) };
+            let mut label =
+                if curve.fixed.is_empty() { series.to_string() } else { format!("{series} ({})", curve.fixed) };
+            if plot.kind == PlotKind::Metric && plot.log_x && plot.log_y && categories.is_none() {
+                if let Some(k) = growth_exponent(&points) {
+                    label = format!("{label} ∝ x^{k:.2}");
+                }
+            }
             provenance.push(curve.points.iter().map(|p| p.provenance.clone()).collect());
             let (colour, style, front) = (Some(look.colour), look.style + k, look.front);
             lines.push(Line { label, style, colour, front, points });

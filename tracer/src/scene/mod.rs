@@ -12,6 +12,7 @@ mod random_spheres;
 mod random_triangles;
 pub mod sphere_file;
 mod tessellate;
+mod tiled;
 
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -25,6 +26,7 @@ pub use mesh_scene::{MeshScene, View};
 pub use random_triangles::random_triangles;
 pub use sphere_file::SphereFileError;
 pub use tessellate::tessellate;
+pub use tiled::TILE_SEED;
 
 /// Surface description of one sphere.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
