@@ -177,9 +177,13 @@ impl Headline {
                 None => groups.push((key, vec![cell])),
             }
         }
+        let series = &self.spec.series;
+        let theirs = match self.spec.against.as_slice() {
+            [one] => format!("{one}'s"),
+            _ => "the faster one's".to_string(),
+        };
         let mut text = format!(
-            "How much faster {} is than {} ({}, their time over ours; above 1 = ours faster):",
-            self.spec.series,
+            "How much faster {series} is than {} ({}: {theirs} over {series}'s; above 1 = {series} faster):",
             self.bar_words(),
             self.metric
         );

@@ -384,7 +384,7 @@ fn caption(spec: &ReportSpec, plot: &crate::spec::PlotSpec) -> String {
             plot.y
         ),
         PlotKind::Efficiency => format!("Speedup over {reference} divided by the thread count: 1 is linear scaling."),
-        PlotKind::Metric if plot.log_x && plot.log_y => format!(
+        PlotKind::Metric if plot.log_x && plot.log_y && crate::figures::grows_with_size(&plot.x) => format!(
             "Median {} per series, bars 95% intervals: lower is faster for a time. Each legend entry ends with its \
              line's growth, {} ∝ {}^k, k fitted by least squares through the medians on these log-log axes.",
             plot.y, plot.y, plot.x

@@ -239,7 +239,7 @@ pub(crate) fn curves_of<'a>(runs: &'a [Run], series: &str, x: &str) -> Vec<Curve
         .copied()
         .filter(|c| *c != column::seed && *c != x)
         .filter(|c| own.iter().any(|r| r.text(c) != own[0].text(c)))
-        .filter(|c| !names_x(&own, c, &x_of))
+        .filter(|c| !names_x(&own, c, x_of))
         .collect();
     let mut curves: Vec<CurveRuns> = Vec::new();
     for run in own {

@@ -95,7 +95,7 @@ declare_columns! {
         embree_packet: Option<EmbreePacket> = Some(EmbreePacket(16)), applies embree_packet_ray_set else None,
             added 6, unit "rays";
         /// The triangle mesh of `scene = "mesh"`: a data set name (`harness fetch NAME`) or an `.obj` or `.ply` file
-        /// or folder of `.ply` files.
+        /// or folder of `.ply` files; `MODEL*N` is N copies of one tiled into a bigger city (docs/meshes.md).
         mesh: Option<MeshSource> = None, applies mesh_scene else None, added 7;
         /// Ray–triangle test of the tracer's structures on triangle scenes (peers run their own).
         triangle_test: Option<TriangleTest> = Some(TriangleTest::Watertight), applies ours_on_triangles else None,

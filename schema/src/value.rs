@@ -200,7 +200,7 @@ impl AxisType for MeshSource {
         }
     }
     fn allowed(_: &str) -> String {
-        "a data set name (harness fetch --list) or an .obj/.ply path".into()
+        "a data set name (harness fetch --list), an .obj/.ply path, or MODEL*N (N copies)".into()
     }
     fn cell(&self) -> Cell {
         Cell::Text(self.0.clone())

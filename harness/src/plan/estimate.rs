@@ -157,3 +157,32 @@ pub fn primitives(s: &Settings) -> f64 {
         _ => objects,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use schema::{MeshSource, Threads};
+
+    fn mesh(name: &str, accel: Accel) -> Settings {
+        let mut s =
+            Settings { scene: SceneName::Mesh, mesh: Some(MeshSource(name.into())), accel, ..Settings::default() };
+        s.threads = Threads::Count(1);
+        s
+    }
+
+    #[test]
+    fn a_tiled_data_set_counts_its_copies_and_builds_cost_per_builder() {
+        let ours = |split| Settings { split: Some(split), ..mesh("san-francisco*21", Accel::Ours(AccelKind::WideBvh)) };
+        assert_eq!(primitives(&mesh("san-francisco*21", Accel::Ours(AccelKind::WideBvh))), 21.0 * 268_041.0);
+        assert_eq!(primitives(&mesh("some/file.obj", Accel::Ours(AccelKind::WideBvh))), 2e5);
+        let n = 21.0 * 268_041.0;
+        let (spatial, binned) = (ours(Split::SpatialSah), ours(Split::BinnedSah));
+        let build = |s: &Settings| triangle_build_seconds(s, n, 1, 2);
+        assert!(build(&spatial) > build(&binned));
+        let obvhs = Settings { obvhs_build: Some(ObvhsQuality::Slow), ..mesh("x", Accel::Peer(PeerKind::ObvhsCwbvh)) };
+        assert!(build(&obvhs) > build(&spatial));
+        // Our spatial build is serial: more threads do not help it; the binned build's do.
+        assert_eq!(triangle_build_seconds(&spatial, n, 2, 2), build(&spatial));
+        assert!(triangle_build_seconds(&binned, n, 2, 2) < build(&binned));
+    }
+}

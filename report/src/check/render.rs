@@ -126,10 +126,16 @@ impl CheckOutcome {
     }
 }
 
-/// `series settings metric ×ratio` of a time comparison (the confirmation's ratio when there is one).
+/// `series settings metric +3.1% time` of a time comparison (the confirmation's change when there is one; +: the
+/// run took longer).
 fn describe_time(t: &TimeComparison) -> String {
     let ratio = t.confirmation.as_ref().map_or(t.first.ratio.value, |c| c.ratio.value);
-    format!("{} {} {} ×{}", t.series, t.settings, t.metric, num(ratio))
+    format!("{} {} {} {} time", t.series, t.settings, t.metric, percent(ratio))
+}
+
+/// A ratio and its interval as signed percentage changes, e.g. `+3.1% [+1.0%, +5.2%]`.
+fn percent_interval(e: &Estimate) -> String {
+    format!("{} [{}, {}]", percent(e.value), percent(e.lo), percent(e.hi))
 }
 
 /// A ratio as a signed percentage change, e.g. `+3.1%`.
@@ -217,8 +223,8 @@ fn time_table(md: &mut String, outcome: &CheckOutcome) {
         return;
     }
     md.push_str(
-        "| configuration | phase | threads | baseline median [95% CI] | run median [95% CI] | run/baseline [95% CI] | \
-         verdict | gates? | measured again: median, run/baseline [95% CI], verdict |\n",
+        "| configuration | phase | threads | baseline median [95% CI] | run median [95% CI] | time change [95% CI] \
+         (+ = slower) | verdict | gates? | measured again: median, time change [95% CI], verdict |\n",
     );
     md.push_str("|---|---|---|---|---|---|---|---|---|\n");
     let mut rows: Vec<&TimeComparison> = outcome.times.iter().collect();
@@ -231,7 +237,7 @@ fn time_table(md: &mut String, outcome: &CheckOutcome) {
         };
         let again = t.confirmation.as_ref().map_or_else(
             || if t.flagged() { "not measured again".to_string() } else { "—".to_string() },
-            |c| format!("{}, {}, {}", num(c.new.value), interval(&c.ratio), verdict(c)),
+            |c| format!("{}, {}, {}", num(c.new.value), percent_interval(&c.ratio), verdict(c)),
         );
         row(
             md,
@@ -241,7 +247,7 @@ fn time_table(md: &mut String, outcome: &CheckOutcome) {
                 &cell(&t.threads),
                 &interval(&t.first.old),
                 &interval(&t.first.new),
-                &interval(&t.first.ratio),
+                &percent_interval(&t.first.ratio),
                 verdict(&t.first),
                 if t.gating { "yes" } else { "no" },
                 &again,
@@ -257,7 +263,10 @@ fn speedup_table(md: &mut String, speedups: &[SpeedupComparison]) {
         return;
     }
     md.push_str("Speedups over the reference series (for information; the phase times above gate):\n\n");
-    md.push_str("| series | point | baseline speedup [95% CI] | new speedup [95% CI] | new/old [95% CI] | verdict |\n");
+    md.push_str(
+        "| series | point | baseline speedup [95% CI] | new speedup [95% CI] | speedup change [95% CI] (+ = \
+         faster) | verdict |\n",
+    );
     md.push_str("|---|---|---|---|---|---|\n");
     let mut rows: Vec<&SpeedupComparison> = speedups.iter().collect();
     rows.sort_by_key(|s| s.verdict.rank());
@@ -273,9 +282,9 @@ fn speedup_table(md: &mut String, speedups: &[SpeedupComparison]) {
             num(s.new.value),
             num(s.new.lo),
             num(s.new.hi),
-            num(s.ratio),
-            num(s.lo),
-            num(s.hi),
+            percent(s.ratio),
+            percent(s.lo),
+            percent(s.hi),
             s.verdict.word()
         );
     }

@@ -111,6 +111,12 @@ pub fn growth_exponent(points: &[ChartPoint]) -> Option<f64> {
     (sxx > 0.0).then(|| sxy / sxx)
 }
 
+/// True for an x axis that is the scene's size (`primitives`, `objects`): a log-log figure over it gets each
+/// line's fitted growth.
+pub fn grows_with_size(x: &str) -> bool {
+    x == column::primitives || x == column::objects
+}
+
 /// What a plot shows, as chart data with each point's provenance.
 pub(crate) fn figure_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Figure {
     let bar = spec.bar();
@@ -151,10 +157,14 @@ pub(crate) fn figure_of(rows: &Rows, spec: &ReportSpec, plot: &PlotSpec) -> Figu
                 .collect();
             let mut label =
                 if curve.fixed.is_empty() { series.to_string() } else { format!("{series} ({})", curve.fixed) };
-            if plot.kind == PlotKind::Metric && plot.log_x && plot.log_y && categories.is_none() {
-                if let Some(k) = growth_exponent(&points) {
-                    label = format!("{label} ∝ x^{k:.2}");
-                }
+            if plot.kind == PlotKind::Metric
+                && grows_with_size(&plot.x)
+                && plot.log_x
+                && plot.log_y
+                && categories.is_none()
+                && let Some(k) = growth_exponent(&points)
+            {
+                label = format!("{label} ∝ x^{k:.2}");
             }
             provenance.push(curve.points.iter().map(|p| p.provenance.clone()).collect());
             let (colour, style, front) = (Some(look.colour), look.style + k, look.front);
@@ -259,6 +269,16 @@ mod tests {
         let rows = crate::rows::read(&dir.join("runs.csv")).unwrap();
         std::fs::remove_dir_all(&dir).unwrap();
         rows
+    }
+
+    #[test]
+    fn growth_exponent_is_the_log_log_slope() {
+        let at = |x: f64, y: f64| ChartPoint { x, y, lo: y, hi: y };
+        let cubic: Vec<ChartPoint> = [1e4, 1e5, 1e6, 5e6].iter().map(|&x| at(x, 2e-9 * x.powf(1.5))).collect();
+        assert!((growth_exponent(&cubic).unwrap() - 1.5).abs() < 1e-9);
+        assert_eq!(growth_exponent(&cubic[..2]), None, "two points make no fit");
+        let flat: Vec<ChartPoint> = [1e4, 1e5, 1e6].iter().map(|&x| at(x, 3.0)).collect();
+        assert!(growth_exponent(&flat).unwrap().abs() < 1e-12);
     }
 
     #[test]
