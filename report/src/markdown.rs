@@ -384,12 +384,22 @@ fn caption(spec: &ReportSpec, plot: &crate::spec::PlotSpec) -> String {
             plot.y
         ),
         PlotKind::Efficiency => format!("Speedup over {reference} divided by the thread count: 1 is linear scaling."),
-        PlotKind::Metric if plot.log_x && plot.log_y && crate::figures::grows_with_size(&plot.x) => format!(
-            "Median {} per series, bars 95% intervals: lower is faster for a time. Each legend entry ends with its \
-             line's growth, {} ∝ {}^k, k fitted by least squares through the medians on these log-log axes.",
-            plot.y, plot.y, plot.x
-        ),
-        PlotKind::Metric => format!("Median {} per series, bars 95% intervals: lower is faster for a time.", plot.y),
+        PlotKind::Metric => {
+            let lower = match plot.y.as_str() {
+                y if y.ends_with("_per_s") => "higher is faster",
+                y if y.ends_with("_s") => "lower is faster",
+                _ => "lower is less",
+            };
+            let mut text = format!("Median {} per series, bars 95% intervals: {lower}.", plot.y);
+            if plot.log_x && plot.log_y && crate::figures::grows_with_size(&plot.x) {
+                text.push_str(&format!(
+                    " Each legend entry ends with its line's growth, {} ∝ {}^k, k fitted by least squares through the \
+                     medians on these log-log axes.",
+                    plot.y, plot.x
+                ));
+            }
+            text
+        }
         PlotKind::TradeOff => format!("Median {} against median {}: lower-left is better for times.", plot.x, plot.y),
     }
 }

@@ -344,6 +344,7 @@ pub fn ratio_curves(spec: &ReportSpec, runs: &[Run], other: &str, series: &str, 
 /// count (a mesh), else its object count with them.
 pub fn point_label(fixed: &str, x: f64) -> String {
     match (fixed.is_empty(), x == 0.0) {
+        (true, true) => "its only point (the claim's `where`)".to_string(),
         (false, true) => fixed.to_string(),
         (false, false) => format!("{x} objects ({fixed})"),
         (true, _) => format!("{x} objects"),

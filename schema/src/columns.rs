@@ -10,7 +10,7 @@ use tracer::scene::{SceneKind, View};
 
 use crate::names::{
     Accel, EmbreeIsa, EmbreePacket, EmbreeQuality, LeafBlock, MeshSource, NodeWidth, ObvhsQuality, Packet, PeerKind,
-    SceneName, Threads, TinyBvhLayout, TinyBvhQuality, ValidationStatus, Workload, WrongSide,
+    SceneName, Threads, TinyBvhLayout, TinyBvhQuality, TreeBuilder, ValidationStatus, Workload, WrongSide,
 };
 use crate::row::Cell;
 
@@ -119,6 +119,11 @@ declare_columns! {
         reinsertion: u32 = BvhParams::default().reinsertion,
             range(*BvhParams::REINSERTION_ROUNDS.start(), *BvhParams::REINSERTION_ROUNDS.end()), applies tree else 0,
             added 9;
+        /// Who builds the binary tree the wide BVH collapses, on triangle scenes: `ours` (by `split` and the
+        /// settings above) or a peer's builder, its tree then collapsed and traced by ours: `tinybvh` (its `Build`,
+        /// binned SAH) or `tinybvh-high` (its `BuildHQ`, spatial splits); `split`, `leaf_size`, `sah_bins` and
+        /// `spatial_alpha` then do not shape the tree. `build_s` is the peer's build plus our collapse.
+        tree_builder: Option<TreeBuilder> = Some(TreeBuilder::Ours), applies wide_on_triangles else None, added 16;
     }
     measures {
         /// Wall time of the backend's one-time start-up in the process that times the configuration: thread pool,
@@ -315,6 +320,11 @@ fn triangle_scene(s: &Settings) -> bool {
 /// The tracer's structures choose their triangle test.
 fn ours_on_triangles(s: &Settings) -> bool {
     triangle_scene(s) && s.accel.peer().is_none()
+}
+
+/// The wide BVH over triangles (whose binary tree another builder may make).
+fn wide_on_triangles(s: &Settings) -> bool {
+    wide(s) && ours_on_triangles(s)
 }
 
 /// tinybvh's settings.

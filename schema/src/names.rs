@@ -406,6 +406,11 @@ named_enum! {
     TinyBvhQuality { Default = "default", High = "high", }
 }
 
+named_enum! {
+    /// Who builds the binary tree our wide BVH collapses (`tree_builder`): `ours`, or tinybvh's `Build` / `BuildHQ`.
+    TreeBuilder { Ours = "ours", TinyBvh = "tinybvh", TinyBvhHigh = "tinybvh-high", }
+}
+
 /// What a run computes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Workload {

@@ -48,6 +48,33 @@ pub fn build(prims: Primitives<'_>, params: &AccelParams) -> Box<dyn Structure> 
     }
 }
 
+/// A wide BVH (`params`) over `prims` from a binary tree another builder made: its nodes and the primitive ids its
+/// leaves name, checked and laid out by [`BuiltTree::from_external`](crate::accel::bvh::tree::BuiltTree), then
+/// collapsed as the tracer's own trees are. Errors name what is wrong with the tree.
+#[cfg(not(test))]
+pub fn build_from_tree(
+    prims: Primitives<'_>,
+    nodes: &[crate::accel::bvh::tree::FlatNode],
+    prim_order: &[u32],
+    params: &AccelParams,
+) -> Result<Box<dyn Structure>, String> {
+    use crate::accel::bvh::tree::BuiltTree;
+    fn wide<P: crate::accel::wide::WidePrimitive>(
+        p: &[P],
+        nodes: &[crate::accel::bvh::tree::FlatNode],
+        order: &[u32],
+        params: &AccelParams,
+    ) -> Result<BuiltAccel<P>, String> {
+        let built = BuiltTree::from_external(nodes, order, p)?;
+        BuiltAccel::wide_from_tree(&built, params).map_err(|e| e.to_string())
+    }
+    Ok(match prims {
+        Primitives::Spheres(p) => Box::new(wide(p, nodes, prim_order, params)?),
+        Primitives::MollerTrumbore(p) => Box::new(wide(p, nodes, prim_order, params)?),
+        Primitives::Watertight(p) => Box::new(wide(p, nodes, prim_order, params)?),
+    })
+}
+
 /// The tracer's structures as [`Structure`]s: left out of the tracer's unit-test build, which runs none of them.
 #[cfg(not(test))]
 mod compiled {

@@ -1,13 +1,18 @@
 //! The tracer's own structures: the brute-force list, the pointer BVH, the flat BVH and the wide BVH.
 
-use schema::{Accel, Settings};
-use tracer::accel::WideParams;
+use schema::{Accel, Settings, TreeBuilder};
+use tracer::Vec3;
+use tracer::accel::bvh::tree::FlatNode;
 use tracer::accel::wide::Kernel;
+use tracer::accel::{AccelParams, WideParams};
+use tracer::geometry::Aabb;
 use tracer::geometry::{MollerTrumboreTriangle, TrianglePrimitive, TriangleTest, WatertightTriangle};
+use tracer::scene::mesh::Mesh;
 use tracer::structure::{self, Primitives};
 
 use super::{Backend, Built, Geometry, Setup, Unavailable};
 use crate::error::Error;
+use crate::peers::tinybvh::{TinyBvh, TinyLayout, TinyQuality};
 
 /// The tracer under study.
 pub struct Ours;
@@ -30,8 +35,16 @@ impl Backend for Ours {
         Ok(format!("built in; SIMD kernels here: {}; auto = {}", here.join(", "), auto.join(", ")))
     }
 
-    /// A wide BVH runs only with a SIMD kernel this CPU has.
+    /// A wide BVH runs only with a SIMD kernel this CPU has, and over a peer's tree only where the peer runs.
     fn available(&self, settings: &Settings) -> Result<(), Unavailable> {
+        if matches!(settings.tree_builder, Some(TreeBuilder::TinyBvh | TreeBuilder::TinyBvhHigh))
+            && crate::peers::tinybvh::TinyIsa::best().is_none()
+        {
+            return Err(Unavailable {
+                reason: "tree_builder tinybvh: the tinybvh shim is not compiled or runs on no ISA level here".into(),
+                installable: false,
+            });
+        }
         match settings.simd_kernel.filter(|k| !k.is_available()) {
             None => Ok(()),
             Some(kernel) => {
@@ -63,8 +76,38 @@ impl Backend for Ours {
                 }
             },
         };
-        let structure = setup.install(|| structure::build(prims, &params));
+        let (structure, peer_info) = match (settings.tree_builder, geometry) {
+            (Some(builder @ (TreeBuilder::TinyBvh | TreeBuilder::TinyBvhHigh)), Geometry::Triangles(mesh)) => {
+                let quality = if builder == TreeBuilder::TinyBvh { TinyQuality::Default } else { TinyQuality::High };
+                let structure = setup.install(|| peer_tree(prims, mesh, quality, &params))?;
+                (structure, format!("tree from tinybvh 1.6.8 {quality:?} build, collapsed and traced by ours"))
+            }
+            _ => (setup.install(|| structure::build(prims, &params)), "-".to_string()),
+        };
         let simd_kernel = structure.simd_kernel().unwrap_or("-");
-        Ok(Built { structure, peer_info: "-".into(), simd_kernel })
+        Ok(Built { structure, peer_info, simd_kernel })
     }
+}
+
+/// Our wide BVH over tinybvh's binary tree of `mesh` (its plain layout built with `quality`): the tree copied out
+/// of the shim, checked and laid out by the tracer, then collapsed as our own trees are.
+fn peer_tree(
+    prims: Primitives<'_>,
+    mesh: &Mesh,
+    quality: TinyQuality,
+    params: &AccelParams,
+) -> Result<Box<dyn structure::Structure>, Error> {
+    let tiny = TinyBvh::build(mesh, TinyLayout::Bvh, quality).map_err(|e| Error::Run(format!("tree_builder: {e}")))?;
+    let (nodes, order) = tiny.plain_tree().ok_or_else(|| Error::Run("tree_builder: no plain tree".into()))?;
+    drop(tiny);
+    let nodes: Vec<FlatNode> = nodes
+        .iter()
+        .map(|n| FlatNode {
+            bounds: Aabb { min: Vec3::from_array(n.min), max: Vec3::from_array(n.max) },
+            first: n.left_first,
+            prim_count: if n.tri_count > 0 { n.tri_count } else { FlatNode::INTERIOR },
+        })
+        .collect();
+    structure::build_from_tree(prims, &nodes, &order, params)
+        .map_err(|e| Error::Run(format!("tree_builder: tinybvh's tree refused: {e}")))
 }

@@ -138,6 +138,11 @@ impl<P: WidePrimitive> BuiltAccel<P> {
         }
     }
 
+    /// The wide BVH of `params` over a binary tree built elsewhere ([`WideBvh::try_from_tree`]).
+    pub fn wide_from_tree(built: &bvh::tree::BuiltTree<P>, params: &AccelParams) -> Result<Self, bvh::ParamError> {
+        WideBvh::try_from_tree(built, &params.bvh, &params.wide).map(BuiltAccel::WideBvh)
+    }
+
     /// Calls `visitor` with the concrete structure.
     pub fn visit<V: AccelVisitor>(&self, visitor: V) -> V::Output {
         match self {

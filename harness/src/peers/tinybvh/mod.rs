@@ -101,6 +101,22 @@ pub struct TbStats {
 }
 const _: () = assert!(size_of::<TbStats>() == 40 && align_of::<TbStats>() == 8);
 
+/// One node of tinybvh's plain binary tree as the shim copies it (`TbNode`): interior nodes' children are nodes
+/// `left_first` and `left_first + 1`; a leaf (`tri_count > 0`) names `tri_count` primitive indices from `left_first`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TbNode {
+    /// Box corner.
+    pub min: [f32; 3],
+    /// First child, or first primitive index of a leaf.
+    pub left_first: u32,
+    /// Box corner.
+    pub max: [f32; 3],
+    /// Primitives of a leaf; 0 for interior nodes.
+    pub tri_count: u32,
+}
+const _: () = assert!(size_of::<TbNode>() == 32 && align_of::<TbNode>() == 4);
+
 /// The sizes and version a shim variant was compiled with (`TbAbi`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -139,6 +155,8 @@ struct Kernel {
     occluded: unsafe extern "C" fn(*const c_void, *const TbRay) -> bool,
     intersect_batch: unsafe extern "C" fn(*const c_void, *const TbRay, usize, *mut TbHit),
     occluded_batch: unsafe extern "C" fn(*const c_void, *const TbRay, usize, *mut u8),
+    plain_tree_size: unsafe extern "C" fn(*const c_void, *mut u32, *mut u32) -> i32,
+    plain_tree_copy: unsafe extern "C" fn(*const c_void, *mut TbNode, *mut u32),
 }
 
 /// Declares variant `$v`'s entry points in module `$m` and its [`Kernel`] as `$m::KERNEL`.
@@ -149,7 +167,7 @@ macro_rules! variant {
             use std::ffi::c_void;
             use std::sync::Once;
 
-            use super::{Kernel, TbAbi, TbHit, TbRay, TbStats};
+            use super::{Kernel, TbAbi, TbHit, TbNode, TbRay, TbStats};
 
             unsafe extern "C" {
                 /// Start of the variant's static initializers (`build.rs` moved them out of `.init_array`).
@@ -182,6 +200,10 @@ macro_rules! variant {
                 fn intersect_batch(accel: *const c_void, rays: *const TbRay, n: usize, out: *mut TbHit);
                 #[link_name = concat!("tinybvh_", $v, "_occluded_batch")]
                 fn occluded_batch(accel: *const c_void, rays: *const TbRay, n: usize, out: *mut u8);
+                #[link_name = concat!("tinybvh_", $v, "_plain_tree_size")]
+                fn plain_tree_size(accel: *const c_void, nodes: *mut u32, indices: *mut u32) -> i32;
+                #[link_name = concat!("tinybvh_", $v, "_plain_tree_copy")]
+                fn plain_tree_copy(accel: *const c_void, nodes: *mut TbNode, indices: *mut u32);
             }
 
             /// Runs the static initializers once. Only called once the CPU is known to run this variant.
@@ -203,8 +225,19 @@ macro_rules! variant {
                 });
             }
 
-            pub(super) static KERNEL: Kernel =
-                Kernel { init, abi, layouts, build, free, intersect, occluded, intersect_batch, occluded_batch };
+            pub(super) static KERNEL: Kernel = Kernel {
+                init,
+                abi,
+                layouts,
+                build,
+                free,
+                intersect,
+                occluded,
+                intersect_batch,
+                occluded_batch,
+                plain_tree_size,
+                plain_tree_copy,
+            };
         }
     };
 }
@@ -501,6 +534,25 @@ impl TinyBvh {
     /// The shim's statistics of the built structure.
     pub fn raw_stats(&self) -> TbStats {
         self.stats
+    }
+
+    /// The binary tree of the plain layout, copied out: its nodes (tinybvh's order; node 1 is its unused slot) and
+    /// the primitive indices its leaves name. `None` for the other layouts. The copy is checked by its reader
+    /// (`tracer::accel::bvh::tree::BuiltTree::from_external`) before any use.
+    pub fn plain_tree(&self) -> Option<(Vec<TbNode>, Vec<u32>)> {
+        let (mut nodes, mut indices) = (0u32, 0u32);
+        // SAFETY: `handle` is this kernel's live structure; the shim writes the two counts and nothing else.
+        let status = unsafe { (self.kernel.plain_tree_size)(self.handle.as_ptr(), &mut nodes, &mut indices) };
+        if status != 0 {
+            return None;
+        }
+        let mut node_copy = vec![TbNode::default(); nodes as usize];
+        let mut index_copy = vec![0u32; indices as usize];
+        // SAFETY: the two buffers hold exactly the counts the shim just gave for this unchanged structure (it is
+        // never written after `build`), `TbNode` matches the shim's layout (size and alignment asserted on both
+        // sides), and `Vec` gives pointers aligned for their element types.
+        unsafe { (self.kernel.plain_tree_copy)(self.handle.as_ptr(), node_copy.as_mut_ptr(), index_copy.as_mut_ptr()) };
+        Some((node_copy, index_copy))
     }
 }
 

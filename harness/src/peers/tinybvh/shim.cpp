@@ -65,6 +65,16 @@ struct TbStats {
 static_assert(sizeof(TbStats) == 40 && alignof(TbStats) == 8, "TbStats must match mod.rs");
 
 // The sizes this variant was compiled with, checked by mod.rs's tests against its own.
+// One node of the plain layout's binary tree, as tinybvh stores it (BVH::BVHNode): an interior node's children
+// are nodes left_first and left_first + 1; a leaf (tri_count > 0) names tri_count primitive indices from left_first.
+struct TbNode {
+    float min[3];
+    uint32_t left_first;
+    float max[3];
+    uint32_t tri_count;
+};
+static_assert(sizeof(TbNode) == 32 && alignof(TbNode) == 4, "TbNode must match mod.rs");
+
 struct TbAbi {
     uint32_t ray_size, ray_align, hit_size, hit_align, stats_size, stats_align;
     uint32_t tiny_ray_size, tiny_ray_align;
@@ -337,6 +347,30 @@ int32_t TB_FN(build)(const float* positions, const uint32_t* indices, uint32_t t
     }
     *out = a;
     return OK;
+}
+
+// Sizes of a plain-layout structure's binary tree: nodes in use and primitive indices (ERR_LAYOUT for another
+// layout; both 0 for an empty structure).
+int32_t TB_FN(plain_tree_size)(const void* accel, uint32_t* nodes, uint32_t* indices) {
+    const Accel& a = *static_cast<const Accel*>(accel);
+    *nodes = *indices = 0;
+    if (a.layout != LAYOUT_PLAIN) return ERR_LAYOUT;
+    if (a.tris == 0) return OK;
+    *nodes = a.plain.usedNodes;
+    *indices = a.plain.idxCount;
+    return OK;
+}
+
+// Copies that tree: `nodes` and `indices` hold the counts `_plain_tree_size` gave (node 1 is tinybvh's unused slot).
+void TB_FN(plain_tree_copy)(const void* accel, TbNode* nodes, uint32_t* indices) {
+    const Accel& a = *static_cast<const Accel*>(accel);
+    if (a.layout != LAYOUT_PLAIN || a.tris == 0) return;
+    for (uint32_t i = 0; i < a.plain.usedNodes; i++) {
+        const BVH::BVHNode& n = a.plain.bvhNode[i];
+        nodes[i] = TbNode{{n.aabbMin.x, n.aabbMin.y, n.aabbMin.z}, n.leftFirst,
+                          {n.aabbMax.x, n.aabbMax.y, n.aabbMax.z}, n.triCount};
+    }
+    std::memcpy(indices, a.plain.primIdx, size_t(a.plain.idxCount) * sizeof(uint32_t));
 }
 
 // Frees a structure `_build` returned (null is ignored).

@@ -29,6 +29,7 @@ use collapse::{Tree, collapse};
 use kernel::Query;
 #[cfg(target_arch = "x86_64")]
 use kernel::simd::Simd;
+use node::ChildRef;
 use order::{ByOctant, Nearest, Order, Stored};
 use packet::Packets;
 use tile::Tiles;
@@ -37,6 +38,7 @@ use traverse::{Any, AnyBatch, Closest, ClosestBatch};
 pub use leaf::{LeafBlock, WidePrimitive};
 pub use params::{AnyHitOrdering, ChildOrdering, Kernel, WideParams};
 
+use super::bvh::tree::BuiltTree;
 use super::bvh::{BvhParams, ParamError, TreeStats, builder, sah};
 use super::{Accelerator, Hit};
 use crate::counters::Counters;
@@ -73,13 +75,34 @@ impl<P: WidePrimitive> WideBvh<P> {
         bvh.validate()?;
         wide.validate()?;
         let built = builder::build_for_blocks(prims, bvh, wide.leaf_block);
+        Self::laid_out(&built, bvh, wide)
+    }
+
+    /// A binary tree built elsewhere ([`BuiltTree::from_external`]) collapsed and laid out as [`WideBvh::try_build`]
+    /// lays out its own; refuses a leaf of more primitives than one wide leaf holds (31 blocks), with the reason.
+    pub fn try_from_tree(built: &BuiltTree<P>, bvh: &BvhParams, wide: &WideParams) -> Result<Self, ParamError> {
+        bvh.validate()?;
+        wide.validate()?;
+        let most = ChildRef::MAX_BLOCKS as usize * wide.leaf_block as usize;
+        if let Some(leaf) = built.nodes.iter().find(|n| n.is_leaf() && n.prim_count as usize > most) {
+            return Err(ParamError {
+                key: "leaf",
+                allowed: format!("at most {most} primitives a leaf with leaf_block {}", wide.leaf_block),
+                found: leaf.prim_count.to_string(),
+            });
+        }
+        Self::laid_out(built, bvh, wide)
+    }
+
+    /// Collapses `built` into the layout `wide` names.
+    fn laid_out(built: &BuiltTree<P>, bvh: &BvhParams, wide: &WideParams) -> Result<Self, ParamError> {
         let layout = match (wide.width, wide.leaf_block) {
-            (4, 4) => Layout::W4B4(collapse(&built)),
-            (4, 8) => Layout::W4B8(collapse(&built)),
-            (4, _) => Layout::W4B16(collapse(&built)),
-            (_, 4) => Layout::W8B4(collapse(&built)),
-            (_, 8) => Layout::W8B8(collapse(&built)),
-            _ => Layout::W8B16(collapse(&built)),
+            (4, 4) => Layout::W4B4(collapse(built)),
+            (4, 8) => Layout::W4B8(collapse(built)),
+            (4, _) => Layout::W4B16(collapse(built)),
+            (_, 4) => Layout::W8B4(collapse(built)),
+            (_, 8) => Layout::W8B8(collapse(built)),
+            _ => Layout::W8B16(collapse(built)),
         };
         let stats = match &layout {
             Layout::W4B4(t) => stats(t),
