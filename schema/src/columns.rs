@@ -295,7 +295,8 @@ declare_columns! {
 
 /// Every axis the `applies` predicates below read (a test checks that no other axis changes what applies), so
 /// that [`crate::applicability`] enumerates only these.
-pub const APPLICABILITY_INPUTS: &[Axis] = &[Axis::scene, Axis::accel, Axis::split, Axis::strategy, Axis::workload];
+pub const APPLICABILITY_INPUTS: &[Axis] =
+    &[Axis::scene, Axis::accel, Axis::split, Axis::strategy, Axis::workload, Axis::tree_builder];
 
 /// Generated scenes have a seed; sphere files and meshes do not.
 fn generated_scene(s: &Settings) -> bool {
@@ -334,7 +335,12 @@ fn tinybvh(s: &Settings) -> bool {
 
 /// The tracer's trees have tree settings.
 fn tree(s: &Settings) -> bool {
-    s.accel.is_tree()
+    s.accel.is_tree() && !peer_builds_tree(s)
+}
+
+/// A peer's builder makes the wide BVH's binary tree (`tree_builder`): our split settings do not shape it.
+fn peer_builds_tree(s: &Settings) -> bool {
+    wide_on_triangles(s) && matches!(s.tree_builder, Some(TreeBuilder::TinyBvh | TreeBuilder::TinyBvhHigh))
 }
 
 /// Only the binary trees have the `traversal` order.
