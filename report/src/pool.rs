@@ -214,8 +214,8 @@ pub fn categories(runs: &[Run], x: &str) -> Option<Vec<String>> {
     (!values.is_empty()).then_some(values)
 }
 
-/// True when setting `c` only renames the x value: one value of `c` at each x, a different one at each x (the
-/// data set on a `primitives` axis): it makes no curves of its own.
+/// True when setting `c` only renames a numeric x value: one value of `c` at each x, a different one at each x
+/// (the data set on a `primitives` axis): it makes no curves of its own.
 fn names_x(runs: &[&Run], c: &str, x_of: impl Fn(&Run) -> f64) -> bool {
     let mut pairs: Vec<(u64, &str)> = runs.iter().map(|r| (x_of(r).to_bits(), r.text(c))).collect();
     pairs.sort_unstable();
@@ -239,7 +239,7 @@ pub(crate) fn curves_of<'a>(runs: &'a [Run], series: &str, x: &str) -> Vec<Curve
         .copied()
         .filter(|c| *c != column::seed && *c != x)
         .filter(|c| own.iter().any(|r| r.text(c) != own[0].text(c)))
-        .filter(|c| !names_x(&own, c, x_of))
+        .filter(|c| categories.is_some() || !names_x(&own, c, x_of))
         .collect();
     let mut curves: Vec<CurveRuns> = Vec::new();
     for run in own {
