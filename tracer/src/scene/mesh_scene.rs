@@ -127,7 +127,7 @@ fn street(mesh: &Mesh, bounds: Aabb, up: Vec3) -> Option<(Vec3, Vec3)> {
 }
 
 /// Two horizontal unit axes for the unit axis `up`.
-fn horizontal(up: Vec3) -> (Vec3, Vec3) {
+pub(super) fn horizontal(up: Vec3) -> (Vec3, Vec3) {
     let a = Vec3::new(up.z, up.x, up.y);
     let b = Vec3::new(up.y, up.z, up.x);
     (a, b)

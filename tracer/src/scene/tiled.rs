@@ -9,6 +9,7 @@
 use glam::Vec3;
 
 use super::mesh::Mesh;
+use super::mesh_scene::horizontal;
 use crate::rng::SplitMix64;
 
 /// The seed of the copies' quarter turns.
@@ -22,7 +23,7 @@ impl Mesh {
     /// row by row, each turned by 0–3 seeded quarter turns about `up`; copy 0 is this mesh unturned, at the
     /// grid's first cell.
     pub fn tiled(&self, copies: u32, up: Vec3) -> Mesh {
-        let (a, b) = horizontal_axes(up);
+        let (a, b) = horizontal(up);
         let bounds = self.bounds();
         let extent = bounds.extent();
         // Square cells fit a copy in any of its four turns.
@@ -36,11 +37,10 @@ impl Mesh {
         for k in 0..copies {
             let turns = if k == 0 { 0 } else { rng.below(4) as u32 };
             let turned = |p: Vec3| turn(p, a, b, turns);
-            // The turned copy's own box, then the shift that centres it in its cell (the up coordinate unchanged).
-            let (lo, hi) = self.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
-                let q = turned(p);
-                (lo.min(q), hi.max(q))
-            });
+            // The turned copy's own box (a quarter turn only swaps and negates coordinates, so it is the model's box
+            // turned, exactly), then the shift that centres it in its cell (the up coordinate unchanged).
+            let (p, q) = (turned(bounds.min), turned(bounds.max));
+            let (lo, hi) = (p.min(q), p.max(q));
             let centre = |axis: Vec3, index: u32| {
                 let at = axis.dot(lo) + 0.5 * (axis.dot(hi) - axis.dot(lo));
                 axis * (cell * (index as f32 + 0.5) - at)
@@ -52,11 +52,6 @@ impl Mesh {
         }
         out
     }
-}
-
-/// Two horizontal unit axes for the unit axis `up` (the next axes after it: x → y, z; y → z, x; z → x, y).
-fn horizontal_axes(up: Vec3) -> (Vec3, Vec3) {
-    (Vec3::new(up.z, up.x, up.y), Vec3::new(up.y, up.z, up.x))
 }
 
 /// `p` turned by `turns` quarter turns from axis `a` toward axis `b` (both unit axes): exact, by swaps and signs.
