@@ -233,21 +233,23 @@ impl Headline {
                 .collect::<Vec<_>>()
                 .join(" · ")
         };
-        let mut columns = crate::distinct(self.cells.iter().map(|c| label(c, &col_axes)));
-        if col_axes.is_empty() {
-            columns = vec![format!("how much faster than {}", self.bar_words())]; // one column: say what it holds
-        }
+        let column_keys = crate::distinct(self.cells.iter().map(|c| label(c, &col_axes)));
         let row_labels = crate::distinct(self.cells.iter().map(|c| label(c, &row_axes)));
         let rows = row_labels
             .into_iter()
             .map(|r| {
-                let at = columns
+                let at = column_keys
                     .iter()
                     .map(|col| self.cells.iter().position(|c| label(c, &row_axes) == r && label(c, &col_axes) == *col))
                     .collect();
                 (r, at)
             })
             .collect();
+        let columns = if col_axes.is_empty() {
+            vec![format!("how much faster than {}", self.bar_words())] // one column: say what it holds
+        } else {
+            column_keys
+        };
         Grid { columns, rows }
     }
 
