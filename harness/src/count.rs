@@ -59,7 +59,7 @@ pub struct CountRequest<'a> {
 /// Whether a configuration's phases run in the one thread callgrind follows: `None` if counted, else why not.
 pub(crate) fn uncountable(c: &Configuration) -> Option<&'static str> {
     let s = &c.settings;
-    if backend::of(s.accel).own_threads() {
+    if backend::of(s.accel).own_threads(s) {
         Some("the backend's own threads")
     } else if s.strategy == StrategyKind::MpscThreads {
         Some("mpsc-threads")

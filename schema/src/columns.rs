@@ -121,8 +121,10 @@ declare_columns! {
             added 9;
         /// Who builds the binary tree the wide BVH collapses, on triangle scenes: `ours` (by `split` and the
         /// settings above) or a peer's builder, its tree then collapsed and traced by ours: `tinybvh` (its `Build`,
-        /// binned SAH) or `tinybvh-high` (its `BuildHQ`, spatial splits); `split`, `leaf_size`, `sah_bins` and
-        /// `spatial_alpha` then do not shape the tree. `build_s` is the peer's build plus our collapse.
+        /// binned SAH), `tinybvh-high` (its `BuildHQ`, spatial splits), `embree` or `embree-high` (Embree's
+        /// `rtcBuildBVH`, binned SAH or spatial splits, with its internal triangle builder's block of 4 and leaves of
+        /// 4 to 28); `split`, `leaf_size`, `sah_bins` and `spatial_alpha` then do not shape the tree. `build_s` is the
+        /// peer's build plus our collapse.
         tree_builder: Option<TreeBuilder> = Some(TreeBuilder::Ours), applies wide_on_triangles else None, added 16;
     }
     measures {
@@ -340,7 +342,7 @@ fn tree(s: &Settings) -> bool {
 
 /// A peer's builder makes the wide BVH's binary tree (`tree_builder`): our split settings do not shape it.
 fn peer_builds_tree(s: &Settings) -> bool {
-    wide_on_triangles(s) && matches!(s.tree_builder, Some(TreeBuilder::TinyBvh | TreeBuilder::TinyBvhHigh))
+    wide_on_triangles(s) && s.tree_builder.is_some_and(TreeBuilder::is_peer)
 }
 
 /// Only the binary trees have the `traversal` order.

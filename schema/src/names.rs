@@ -407,8 +407,27 @@ named_enum! {
 }
 
 named_enum! {
-    /// Who builds the binary tree our wide BVH collapses (`tree_builder`): `ours`, or tinybvh's `Build` / `BuildHQ`.
-    TreeBuilder { Ours = "ours", TinyBvh = "tinybvh", TinyBvhHigh = "tinybvh-high", }
+    /// Who builds the binary tree our wide BVH collapses (`tree_builder`): `ours`, tinybvh's `Build` / `BuildHQ`, or
+    /// Embree's builder (`rtcBuildBVH`) medium / high.
+    TreeBuilder {
+        Ours = "ours",
+        TinyBvh = "tinybvh",
+        TinyBvhHigh = "tinybvh-high",
+        Embree = "embree",
+        EmbreeHigh = "embree-high",
+    }
+}
+
+impl TreeBuilder {
+    /// True when a peer library builds the tree (its split settings, not ours, shape it).
+    pub fn is_peer(self) -> bool {
+        self != TreeBuilder::Ours
+    }
+
+    /// True when Embree builds the tree (its library must load; its build threads are process-wide).
+    pub fn is_embree(self) -> bool {
+        matches!(self, TreeBuilder::Embree | TreeBuilder::EmbreeHigh)
+    }
 }
 
 /// What a run computes.

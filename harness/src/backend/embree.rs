@@ -36,7 +36,7 @@ impl Backend for Embree {
         .clone()
     }
 
-    fn own_threads(&self) -> bool {
+    fn own_threads(&self, _settings: &Settings) -> bool {
         true
     }
 

@@ -50,7 +50,7 @@ pub trait Backend: Sync {
     }
     /// True when it builds and traces on threads of its own whose limit is process-wide (Embree's TBB): each
     /// configuration is then timed in a worker process of its own, and built outside the harness's pool.
-    fn own_threads(&self) -> bool {
+    fn own_threads(&self, _settings: &Settings) -> bool {
         false
     }
     /// Starts what it needs once per process and configuration, before any timed phase (part of `setup_s`).

@@ -1,6 +1,6 @@
 //! The tracer's own structures: the brute-force list, the pointer BVH, the flat BVH and the wide BVH.
 
-use schema::{Accel, Settings, TreeBuilder};
+use schema::{Accel, Named, Settings, TreeBuilder};
 use tracer::Vec3;
 use tracer::accel::bvh::tree::FlatNode;
 use tracer::accel::wide::Kernel;
@@ -12,7 +12,9 @@ use tracer::structure::{self, Primitives};
 
 use super::{Backend, Built, Geometry, Setup, Unavailable};
 use crate::error::Error;
+use crate::peers::embree::tree::{self as embree_tree, TreeQuality as EmbreeTreeQuality};
 use crate::peers::tinybvh::{TinyBvh, TinyLayout, TinyQuality};
+use crate::peers::{EmbreeConfig, EmbreeDevice};
 
 /// The tracer under study.
 pub struct Ours;
@@ -45,6 +47,11 @@ impl Backend for Ours {
                 installable: false,
             });
         }
+        if settings.tree_builder.is_some_and(TreeBuilder::is_embree)
+            && let Err(e) = crate::peers::embree_status()
+        {
+            return Err(Unavailable { reason: format!("tree_builder embree: {e}"), installable: true });
+        }
         match settings.simd_kernel.filter(|k| !k.is_available()) {
             None => Ok(()),
             Some(kernel) => {
@@ -56,6 +63,21 @@ impl Backend for Ours {
                 })
             }
         }
+    }
+
+    /// Embree's builder runs on its TBB threads, whose limit is process-wide, and outside our pinned pool.
+    fn own_threads(&self, settings: &Settings) -> bool {
+        settings.tree_builder.is_some_and(TreeBuilder::is_embree)
+    }
+
+    /// Embree's device, for a tree Embree builds: its build threads the configuration's.
+    fn start(&self, settings: &Settings) -> Result<Option<Box<dyn std::any::Any + Send + Sync>>, Error> {
+        if !settings.tree_builder.is_some_and(TreeBuilder::is_embree) {
+            return Ok(None);
+        }
+        let config = EmbreeConfig { threads: Some(settings.strategy().threads.max(1)), ..EmbreeConfig::default() };
+        let device = EmbreeDevice::new(&config).map_err(|e| Error::Run(format!("tree_builder embree: {e}")))?;
+        Ok(Some(Box::new(device)))
     }
 
     /// Chooses the primitive once: spheres, or the mesh's triangles with `triangle_test`; everything after is
@@ -81,6 +103,22 @@ impl Backend for Ours {
                 let quality = if builder == TreeBuilder::TinyBvh { TinyQuality::Default } else { TinyQuality::High };
                 let structure = setup.install(|| peer_tree(prims, mesh, quality, &params))?;
                 (structure, format!("tree from tinybvh 1.6.8 {quality:?} build, collapsed and traced by ours"))
+            }
+            (Some(builder @ (TreeBuilder::Embree | TreeBuilder::EmbreeHigh)), Geometry::Triangles(mesh)) => {
+                let quality =
+                    if builder == TreeBuilder::Embree { EmbreeTreeQuality::Medium } else { EmbreeTreeQuality::High };
+                let device: &EmbreeDevice = setup.started().expect("the setup of an Embree tree starts a device");
+                // Embree's build on the calling thread (its TBB workers), our collapse in the pool.
+                let (nodes, order) = embree_tree::build(device, mesh, quality)
+                    .map_err(|e| Error::Run(format!("tree_builder {}: {e}", builder.name())))?;
+                let structure = setup
+                    .install(|| structure::build_from_tree(prims, &nodes, &order, &params))
+                    .map_err(|e| Error::Run(format!("tree_builder: Embree's tree refused: {e}")))?;
+                let info = format!(
+                    "tree from Embree {} rtcBuildBVH {quality:?}, collapsed and traced by ours",
+                    device.info().version
+                );
+                (structure, info)
             }
             _ => (setup.install(|| structure::build(prims, &params)), "-".to_string()),
         };

@@ -44,7 +44,7 @@ impl Setup {
     /// its own (Embree's TBB), on the calling thread, whose workers then inherit its CPUs and not a pinned pool
     /// thread's one. `run` and `render` build here alike.
     pub fn build(&self, backend: &dyn Backend, settings: &Settings, geometry: &Geometry<'_>) -> Result<Built, Error> {
-        if backend.own_threads() {
+        if backend.own_threads(settings) {
             backend.build(settings, geometry, self)
         } else {
             // The phase function runs in the pool (installing from inside the pool again, as the backends' builds

@@ -210,7 +210,7 @@ impl Slot {
         }
         let fresh = self.runner.is_none();
         if fresh {
-            self.runner = Some(if processes > 1 || backend::of(c.settings.accel).own_threads() {
+            self.runner = Some(if processes > 1 || backend::of(c.settings.accel).own_threads(&c.settings) {
                 let exe = std::env::current_exe()
                     .map_err(|e| Error::Run(format!("cannot find the harness executable: {e}")))?;
                 Runner::Worker(Worker::start(&exe, None)?)

@@ -372,3 +372,107 @@ pub type FnIntersectN<P> =
 pub type FnIntersect8 = FnIntersectN<RTCRayHit8>;
 /// `rtcIntersect16`.
 pub type FnIntersect16 = FnIntersectN<RTCRayHit16>;
+
+/// Opaque `RTCBVH` handle (the builder API's BVH object: owns what its thread-local allocators hand out).
+pub type RTCBVH = *mut c_void;
+/// Opaque `RTCThreadLocalAllocator` handle, passed to the builder's node and leaf callbacks.
+pub type RTCThreadLocalAllocator = *mut c_void;
+
+/// `struct RTCBounds` (32 bytes, align 16): a box, with a padding float after each corner.
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RTCBounds {
+    pub lower_x: f32,
+    pub lower_y: f32,
+    pub lower_z: f32,
+    pub align0: f32,
+    pub upper_x: f32,
+    pub upper_y: f32,
+    pub upper_z: f32,
+    pub align1: f32,
+}
+
+/// `struct RTCBuildPrimitive` (32 bytes, align 32): a primitive's box and its ids, what `rtcBuildBVH` sorts.
+#[repr(C, align(32))]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RTCBuildPrimitive {
+    pub lower_x: f32,
+    pub lower_y: f32,
+    pub lower_z: f32,
+    pub geomID: u32,
+    pub upper_x: f32,
+    pub upper_y: f32,
+    pub upper_z: f32,
+    pub primID: u32,
+}
+
+/// `RTCCreateNodeFunction`: a new inner node of `child_count` children.
+pub type RTCCreateNodeFunction =
+    unsafe extern "C" fn(alloc: RTCThreadLocalAllocator, child_count: c_uint, user: *mut c_void) -> *mut c_void;
+/// `RTCSetNodeChildrenFunction`: the node's children, once built.
+pub type RTCSetNodeChildrenFunction =
+    unsafe extern "C" fn(node: *mut c_void, children: *mut *mut c_void, child_count: c_uint, user: *mut c_void);
+/// `RTCSetNodeBoundsFunction`: the boxes of the node's children.
+pub type RTCSetNodeBoundsFunction =
+    unsafe extern "C" fn(node: *mut c_void, bounds: *const *const RTCBounds, child_count: c_uint, user: *mut c_void);
+/// `RTCCreateLeafFunction`: a leaf over `count` primitives.
+pub type RTCCreateLeafFunction = unsafe extern "C" fn(
+    alloc: RTCThreadLocalAllocator,
+    prims: *const RTCBuildPrimitive,
+    count: usize,
+    user: *mut c_void,
+) -> *mut c_void;
+/// `RTCSplitPrimitiveFunction`: the boxes of a primitive's parts on either side of the plane `dim = pos`.
+pub type RTCSplitPrimitiveFunction = unsafe extern "C" fn(
+    prim: *const RTCBuildPrimitive,
+    dim: c_uint,
+    pos: f32,
+    left: *mut RTCBounds,
+    right: *mut RTCBounds,
+    user: *mut c_void,
+);
+/// `RTCProgressMonitorFunction`.
+pub type RTCProgressMonitorFunction = unsafe extern "C" fn(user: *mut c_void, n: f64) -> bool;
+
+/// `struct RTCBuildArguments` (136 bytes): `rtcDefaultBuildArguments` is an inline header function, not exported,
+/// so every field is filled by the caller.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct RTCBuildArguments {
+    pub byteSize: usize,
+    pub buildQuality: u32,
+    pub buildFlags: u32,
+    pub maxBranchingFactor: c_uint,
+    pub maxDepth: c_uint,
+    pub sahBlockSize: c_uint,
+    pub minLeafSize: c_uint,
+    pub maxLeafSize: c_uint,
+    pub traversalCost: f32,
+    pub intersectionCost: f32,
+    pub bvh: RTCBVH,
+    pub primitives: *mut RTCBuildPrimitive,
+    pub primitiveCount: usize,
+    pub primitiveArrayCapacity: usize,
+    pub createNode: Option<RTCCreateNodeFunction>,
+    pub setNodeChildren: Option<RTCSetNodeChildrenFunction>,
+    pub setNodeBounds: Option<RTCSetNodeBoundsFunction>,
+    pub createLeaf: Option<RTCCreateLeafFunction>,
+    pub splitPrimitive: Option<RTCSplitPrimitiveFunction>,
+    pub buildProgress: Option<RTCProgressMonitorFunction>,
+    pub userPtr: *mut c_void,
+}
+
+const _: () = assert!(size_of::<RTCBounds>() == 32 && align_of::<RTCBounds>() == 16);
+const _: () = assert!(size_of::<RTCBuildPrimitive>() == 32 && align_of::<RTCBuildPrimitive>() == 32);
+const _: () = assert!(size_of::<RTCBuildArguments>() == 136 && std::mem::offset_of!(RTCBuildArguments, bvh) == 48);
+const _: () = assert!(std::mem::offset_of!(RTCBuildArguments, createNode) == 80);
+
+/// `rtcNewBVH`.
+pub type FnNewBvh = unsafe extern "C" fn(device: RTCDevice) -> RTCBVH;
+/// `rtcBuildBVH`: the root node or leaf (null on error).
+pub type FnBuildBvh = unsafe extern "C" fn(args: *const RTCBuildArguments) -> *mut c_void;
+/// `rtcThreadLocalAlloc`: memory owned by the BVH, freed by `rtcReleaseBVH`.
+pub type FnThreadLocalAlloc =
+    unsafe extern "C" fn(alloc: RTCThreadLocalAllocator, bytes: usize, align: usize) -> *mut c_void;
+/// `rtcReleaseBVH`.
+pub type FnReleaseBvh = unsafe extern "C" fn(bvh: RTCBVH);

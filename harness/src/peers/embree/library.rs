@@ -127,6 +127,10 @@ pub struct Api {
     pub occluded1: FnOccluded1,
     pub intersect8: FnIntersect8,
     pub intersect16: FnIntersect16,
+    pub new_bvh: FnNewBvh,
+    pub build_bvh: FnBuildBvh,
+    pub thread_local_alloc: FnThreadLocalAlloc,
+    pub release_bvh: FnReleaseBvh,
 }
 
 impl Api {
@@ -163,6 +167,10 @@ impl Api {
             occluded1: sym!("rtcOccluded1"),
             intersect8: sym!("rtcIntersect8"),
             intersect16: sym!("rtcIntersect16"),
+            new_bvh: sym!("rtcNewBVH"),
+            build_bvh: sym!("rtcBuildBVH"),
+            thread_local_alloc: sym!("rtcThreadLocalAlloc"),
+            release_bvh: sym!("rtcReleaseBVH"),
         })
     }
 }

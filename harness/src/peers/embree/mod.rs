@@ -4,12 +4,14 @@
 //! - [`library`]: finding `libembree4` (`EMBREE_LIB`, the system, an `embreex` wheel) and resolving symbols;
 //! - [`device`]: devices, their configuration and error capture;
 //! - [`scene`]: a committed scene of sphere points ([`EmbreeSpheres`]) or triangles ([`EmbreeTriangles`]),
-//!   implementing [`tracer::accel::Accelerator`], with 8- and 16-wide packet queries.
+//!   implementing [`tracer::accel::Accelerator`], with 8- and 16-wide packet queries;
+//! - [`tree`]: Embree's builder (`rtcBuildBVH`) making a binary tree for our tracer (`tree_builder`).
 
 pub mod abi;
 pub mod device;
 pub mod library;
 pub mod scene;
+pub mod tree;
 
 #[cfg(test)]
 mod tests;

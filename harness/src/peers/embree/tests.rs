@@ -103,6 +103,45 @@ fn triangles_agree_with_brute_force() {
     }
 }
 
+/// Embree's builder's trees (`rtcBuildBVH`, binned and with spatial splits), copied out and collapsed into our wide
+/// BVH, give brute force's hits; every triangle is in some leaf, and only spatial splits name one twice.
+#[test]
+fn embree_trees_under_our_kernel_agree_with_brute_force() {
+    use tracer::accel::WideBvh;
+    use tracer::accel::bvh::BvhParams;
+    use tracer::accel::bvh::tree::BuiltTree;
+    use tracer::accel::wide::WideParams;
+    use tracer::geometry::{MollerTrumboreTriangle, TrianglePrimitive};
+
+    let Some(device) = embree_device("embree_trees_under_our_kernel_agree_with_brute_force") else { return };
+    let mut meshes: Vec<(String, Mesh, Vec<Ray>)> =
+        test_meshes().into_iter().map(|m| (m.label, m.mesh, m.rays)).collect();
+    let g = grid(64);
+    meshes.push(("grid 64".into(), g.clone(), tracer::testing::mesh_ray_mix(&g, 7, 2_000)));
+    for (label, mesh, rays) in meshes {
+        if mesh.indices.is_empty() {
+            assert!(tree::build(&device, &mesh, tree::TreeQuality::Medium).is_err(), "{label}: no triangles");
+            continue;
+        }
+        let reference = triangle_reference(&mesh, &rays);
+        for quality in [tree::TreeQuality::Medium, tree::TreeQuality::High] {
+            let what = format!("embree tree {quality:?} {label}");
+            let (nodes, order) = tree::build(&device, &mesh, quality).expect(&what);
+            eprintln!("{what}: {} refs of {} tris, {} nodes", order.len(), mesh.indices.len(), nodes.len());
+            let mut named = vec![0u32; mesh.indices.len()];
+            order.iter().for_each(|&id| named[id as usize] += 1);
+            assert!(named.iter().all(|&k| k >= 1), "{what}: a triangle in no leaf");
+            if quality == tree::TreeQuality::Medium {
+                assert_eq!(order.len(), mesh.indices.len(), "{what}: references without spatial splits");
+            }
+            let prims = MollerTrumboreTriangle::all(mesh.triangles());
+            let built = BuiltTree::from_external(&nodes, &order, &prims).expect(&what);
+            let wide = WideBvh::try_from_tree(&built, &BvhParams::default(), &WideParams::default()).expect(&what);
+            reference.assert_agrees(&what, &wide, Strictness::Arbitrated);
+        }
+    }
+}
+
 /// A `side` × `side` grid of unit quads, two triangles each, its heights a fixed bumpy function (not flat, so
 /// the boxes are not degenerate).
 fn grid(side: u32) -> Mesh {
