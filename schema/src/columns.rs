@@ -10,7 +10,7 @@ use tracer::scene::{SceneKind, View};
 
 use crate::names::{
     Accel, EmbreeIsa, EmbreePacket, EmbreeQuality, LeafBlock, MeshSource, NodeWidth, ObvhsQuality, Packet, PeerKind,
-    SceneName, Threads, TinyBvhLayout, TinyBvhQuality, TreeBuilder, ValidationStatus, Workload, WrongSide,
+    SahBlock, SceneName, Threads, TinyBvhLayout, TinyBvhQuality, TreeBuilder, ValidationStatus, Workload, WrongSide,
 };
 use crate::row::Cell;
 
@@ -76,6 +76,12 @@ declare_columns! {
         /// Spheres per SIMD leaf block of the wide BVH (4, 8 or 16).
         leaf_block: Option<LeafBlock> = Some(LeafBlock(WideParams::default().leaf_block)), applies wide else None,
             added 2, unit "spheres";
+        /// Primitives the binary build's SAH counts a leaf in blocks of, a node of at most that many always a leaf
+        /// (capped at `leaf_block`: the default, 16, is the leaf block). The collapse still makes every subtree of at
+        /// most `leaf_block` primitives one leaf, so a smaller block changes which primitives share a leaf: Embree's
+        /// triangle builders count blocks of 4 under 8-wide nodes.
+        sah_block: Option<SahBlock> = Some(SahBlock(WideParams::default().sah_block)), applies wide_own_tree else None,
+            added 17, unit "spheres";
         /// SIMD kernel of the wide BVH's traversal (`auto`: the best this CPU has; the one that ran is in
         /// `simd_kernel_used`).
         simd_kernel: Option<Kernel> = Some(WideParams::default().kernel), applies wide else None, added 2;
@@ -355,6 +361,11 @@ fn wide(s: &Settings) -> bool {
     s.accel.is_wide()
 }
 
+/// A wide BVH over a binary tree of our own builders.
+fn wide_own_tree(s: &Settings) -> bool {
+    wide(s) && tree(s)
+}
+
 /// The wide BVH's packets are for ray sets: renders trace one ray at a time.
 fn wide_ray_set(s: &Settings) -> bool {
     wide(s) && s.workload != Workload::Render
@@ -473,6 +484,7 @@ impl Settings {
             order: self.child_order.unwrap_or(wide_default.order),
             any_hit_order: self.any_hit_order.unwrap_or(wide_default.any_hit_order),
             packet: self.packet.map_or(wide_default.packet, Packet::rays),
+            sah_block: self.sah_block.map_or(wide_default.sah_block, |b| b.0),
         };
         AccelParams { kind, bvh, wide }
     }

@@ -25,7 +25,7 @@ pub use columns::{Axis, AxisValue, Row, Settings, column};
 pub use names::MeshSource;
 pub use names::{
     Accel, EmbreeIsa, EmbreePacket, EmbreeQuality, LeafBlock, Named, NodeWidth, ObvhsQuality, Packet, PeerKind,
-    SceneName, Threads, TinyBvhLayout, TinyBvhQuality, TreeBuilder, ValidationStatus, Workload, WrongSide,
+    SahBlock, SceneName, Threads, TinyBvhLayout, TinyBvhQuality, TreeBuilder, ValidationStatus, Workload, WrongSide,
 };
 pub use row::{Cell, Column, Kind, Role};
 pub use value::{AxisType, Raw};

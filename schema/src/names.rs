@@ -297,6 +297,11 @@ int_choice! {
 }
 
 int_choice! {
+    /// Primitives the binary build's SAH counts leaves in blocks of (`WideParams::SAH_BLOCKS`, at most the leaf block).
+    SahBlock = WideParams::SAH_BLOCKS
+}
+
+int_choice! {
     /// Rays of `embree-packets`' queries: 8 (`rtcIntersect8`) or 16 (`rtcIntersect16`).
     EmbreePacket = [8, 16]
 }

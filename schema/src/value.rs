@@ -2,7 +2,7 @@
 
 use std::fmt::Debug;
 
-use crate::names::{EmbreePacket, LeafBlock, MeshSource, Named, NodeWidth, Threads};
+use crate::names::{EmbreePacket, LeafBlock, MeshSource, Named, NodeWidth, SahBlock, Threads};
 use crate::row::{Cell, Kind};
 
 /// A config value as TOML (or the command line) gives it.
@@ -137,7 +137,7 @@ macro_rules! int_choice_axis_type {
     )*};
 }
 
-int_choice_axis_type!(NodeWidth, LeafBlock, EmbreePacket);
+int_choice_axis_type!(NodeWidth, LeafBlock, SahBlock, EmbreePacket);
 
 impl AxisType for f32 {
     const KIND: Kind = Kind::Float;

@@ -66,7 +66,8 @@ pub fn every_wide() -> Vec<AccelParams> {
                     let bvh = BvhParams { split, leaf_size, traversal: Traversal::FrontToBack, ..BvhParams::default() };
                     let packet = packets.next().expect("cycle");
                     let any_hit_order = any_hit_orders.next().expect("cycle");
-                    let wide = WideParams { width, leaf_block, kernel, order, any_hit_order, packet };
+                    let sah_block = if leaf_block == 16 && order == ChildOrdering::Distance { 4 } else { 16 };
+                    let wide = WideParams { width, leaf_block, kernel, order, any_hit_order, packet, sah_block };
                     all.push(AccelParams { kind: AccelKind::WideBvh, bvh, wide });
                 }
             }

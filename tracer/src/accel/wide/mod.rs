@@ -67,14 +67,14 @@ pub struct WideBvh<P: WidePrimitive = Sphere> {
 }
 
 impl<P: WidePrimitive> WideBvh<P> {
-    /// Builds the binary tree with `bvh` (its SAH counting leaves in blocks of `wide.leaf_block`), collapses it
+    /// Builds the binary tree with `bvh` (its SAH counting leaves in blocks of [`WideParams::build_block`]), collapses it
     /// and lays it out; refuses invalid parameters, and a kernel this CPU lacks, with the reason.
     ///
     /// Builds with the threads of the current rayon pool; the tree is identical whatever the thread count.
     pub fn try_build(prims: &[P], bvh: &BvhParams, wide: &WideParams) -> Result<Self, ParamError> {
         bvh.validate()?;
         wide.validate()?;
-        let built = builder::build_for_blocks(prims, bvh, wide.leaf_block);
+        let built = builder::build_for_blocks(prims, bvh, wide.build_block());
         Self::laid_out(&built, bvh, wide)
     }
 

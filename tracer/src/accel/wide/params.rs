@@ -149,6 +149,12 @@ pub struct WideParams {
     /// (see [`super::tile`]). Left out when serialized at 1.
     #[serde(skip_serializing_if = "WideParams::is_single")]
     pub packet: u32,
+    /// Primitives the binary build's SAH counts a leaf in blocks of, a node of at most that many always a leaf;
+    /// in [`WideParams::SAH_BLOCKS`], capped at `leaf_block` (so the default, 16, is the leaf block). The collapse still makes every subtree of at
+    /// most `leaf_block` primitives one leaf: a smaller block only changes which primitives share it. Left out when
+    /// serialized at 16.
+    #[serde(default = "WideParams::widest_sah_block", skip_serializing_if = "WideParams::is_widest_sah_block")]
+    pub sah_block: u32,
 }
 
 impl Default for WideParams {
@@ -160,6 +166,7 @@ impl Default for WideParams {
             order: ChildOrdering::Distance,
             any_hit_order: AnyHitOrdering::ChildOrder,
             packet: 1,
+            sah_block: 16,
         }
     }
 }
@@ -169,11 +176,26 @@ impl WideParams {
     pub const WIDTHS: [u32; 2] = [4, 8];
     /// Allowed `leaf_block` values.
     pub const LEAF_BLOCKS: [u32; 3] = [4, 8, 16];
+    /// Allowed `sah_block` values.
+    pub const SAH_BLOCKS: [u32; 5] = [1, 2, 4, 8, 16];
     /// Allowed `packet` values.
     pub const PACKETS: [u32; 4] = [1, 8, 16, 64];
 
     fn is_single(packet: &u32) -> bool {
         *packet == 1
+    }
+
+    fn widest_sah_block() -> u32 {
+        16
+    }
+
+    fn is_widest_sah_block(block: &u32) -> bool {
+        *block == 16
+    }
+
+    /// The block the binary build's SAH counts leaves in: `sah_block`, at most the leaf block.
+    pub fn build_block(&self) -> u32 {
+        self.sah_block.min(self.leaf_block)
     }
 
     /// True for the default parameters (serialized parameters of other structures leave them out).
@@ -190,6 +212,10 @@ impl WideParams {
         if !Self::LEAF_BLOCKS.contains(&self.leaf_block) {
             let found = self.leaf_block.to_string();
             return Err(ParamError { key: "leaf_block", allowed: list(&Self::LEAF_BLOCKS), found });
+        }
+        if !Self::SAH_BLOCKS.contains(&self.sah_block) {
+            let found = self.sah_block.to_string();
+            return Err(ParamError { key: "sah_block", allowed: list(&Self::SAH_BLOCKS), found });
         }
         if !Self::PACKETS.contains(&self.packet) {
             return Err(ParamError { key: "packet", allowed: list(&Self::PACKETS), found: self.packet.to_string() });
@@ -215,6 +241,9 @@ mod tests {
         assert_eq!((e.key, e.allowed.as_str()), ("leaf_block", "4, 8, 16"));
         let e = WideParams { packet: 4, ..WideParams::default() }.validate().unwrap_err();
         assert_eq!((e.key, e.allowed.as_str()), ("packet", "1, 8, 16, 64"));
+        let e = WideParams { sah_block: 3, ..WideParams::default() }.validate().unwrap_err();
+        assert_eq!((e.key, e.allowed.as_str()), ("sah_block", "1, 2, 4, 8, 16"));
+        assert_eq!(WideParams { sah_block: 16, leaf_block: 8, ..WideParams::default() }.build_block(), 8);
         assert!(WideParams::default().validate().is_ok());
     }
 
