@@ -47,10 +47,11 @@ impl Backend for Ours {
                 installable: false,
             });
         }
+        // Embree's backend loads the library once per process and remembers why it could not.
         if settings.tree_builder.is_some_and(TreeBuilder::is_embree)
-            && let Err(e) = crate::peers::embree_status()
+            && let Err(e) = super::embree::Embree.here()
         {
-            return Err(Unavailable { reason: format!("tree_builder embree: {e}"), installable: true });
+            return Err(Unavailable { reason: format!("tree_builder embree: {}", e.reason), ..e });
         }
         match settings.simd_kernel.filter(|k| !k.is_available()) {
             None => Ok(()),

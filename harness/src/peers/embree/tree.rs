@@ -191,7 +191,7 @@ unsafe extern "C" fn set_node_children(
     // SAFETY: `node` is one of ours; Embree passes `child_count` children, each touched by one thread only.
     let node = unsafe { &mut *(node as *mut Inner) };
     for i in 0..(child_count as usize).min(MAX_CHILDREN) {
-        node.children[i] = unsafe { *children.add(i) };
+        node.children[i] = unsafe { children.add(i).read_unaligned() };
     }
     node.count = child_count; // a count over MAX_CHILDREN is refused when the tree is copied out
 }
@@ -205,7 +205,8 @@ unsafe extern "C" fn set_node_bounds(
     // SAFETY: as in `set_node_children`.
     let node = unsafe { &mut *(node as *mut Inner) };
     for i in 0..(child_count as usize).min(MAX_CHILDREN) {
-        let b = unsafe { &**bounds.add(i) };
+        // Read without assuming Embree's 16-byte alignment of the box (nothing here relies on it).
+        let b = unsafe { bounds.add(i).read_unaligned().read_unaligned() };
         node.bounds[i] = Aabb {
             min: tracer::Vec3::new(b.lower_x, b.lower_y, b.lower_z),
             max: tracer::Vec3::new(b.upper_x, b.upper_y, b.upper_z),
@@ -227,7 +228,7 @@ unsafe extern "C" fn create_leaf(
         p.write(Leaf { tag: LEAF, count: count as u32 });
         let ids = (p as *mut u8).add(size_of::<Leaf>()) as *mut u32;
         for i in 0..count {
-            ids.add(i).write((*prims.add(i)).primID);
+            ids.add(i).write(prims.add(i).read_unaligned().primID);
         }
     }
     p as *mut c_void
@@ -244,8 +245,8 @@ unsafe extern "C" fn split_triangle(
     right: *mut RTCBounds,
     user: *mut c_void,
 ) {
-    // SAFETY: our context and Embree's primitive and out-pointers, valid for the call.
-    let (context, prim) = unsafe { (&*(user as *const Context), &*prim) };
+    // SAFETY: our context and Embree's primitive, valid for the call; read without assuming its alignment.
+    let (context, prim) = unsafe { (&*(user as *const Context), prim.read_unaligned()) };
     let within = Box3A {
         min: Vec3A::new(prim.lower_x, prim.lower_y, prim.lower_z),
         max: Vec3A::new(prim.upper_x, prim.upper_y, prim.upper_z),
@@ -267,10 +268,10 @@ unsafe extern "C" fn split_triangle(
         align1: 0.0,
     };
     let pick = |i: usize| if is_empty(&halves[i]) { out(&cut[i]) } else { out(&halves[i]) };
-    // SAFETY: Embree's out-pointers.
+    // SAFETY: Embree's out-pointers, valid for the call; written without assuming their alignment.
     unsafe {
-        left.write(pick(0));
-        right.write(pick(1));
+        left.write_unaligned(pick(0));
+        right.write_unaligned(pick(1));
     }
 }
 
