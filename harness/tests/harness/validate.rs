@@ -10,7 +10,7 @@ fn validate_prints_runs_and_an_estimate() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.contains("configurations 162"), "{out}");
     assert!(
-        out.contains("runs           at most 1458 recorded (9 repetitions each) + 0 warm-ups, order interleaved"),
+        out.contains("runs           at most 1566 recorded (9 repetitions each) + 0 warm-ups, order interleaved"),
         "{out}"
     );
     assert!(out.contains("estimate       ~"), "{out}");
