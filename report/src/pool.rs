@@ -90,9 +90,11 @@ pub fn counterparts<'a>(
         .collect()
 }
 
-/// The runs of `group` each paired with its one counterpart in series `other` from the same round: equal on every
-/// setting but those the series fix (seeds included, whatever `ratio_against` ignores) and on `repetition`. `None`
-/// unless every run of the group and every counterpart has exactly one partner, and both sides have `metric`.
+/// The runs of `group` paired with their counterparts in series `other` from the same rounds: equal on every setting
+/// but those the series fix (seeds included, whatever `ratio_against` ignores) and on `repetition`. A run whose
+/// round `other` did not reach (adaptive repetitions stopped one side first: `other` has runs of that setting, not of
+/// that round) is left out, as are `other`'s rounds the group did not reach. `None` when a run has no counterpart at
+/// all, or two, or shares one with another run, when a side lacks `metric`, or when fewer than two rounds pair.
 /// The third list names each round's pair of processes (`process_id` of both sides).
 fn rounds(
     spec: &ReportSpec,
@@ -104,12 +106,17 @@ fn rounds(
     let mut taken = std::collections::HashSet::new();
     let mut pairs = (Vec::new(), Vec::new(), Vec::new());
     for run in group {
-        let mut partners = runs.iter().enumerate().filter(|(_, candidate)| {
-            candidate.series() == other
-                && candidate.row.repetition == run.row.repetition
-                && matches(spec, run, candidate, &[])
-        });
-        let (index, partner) = partners.next()?;
+        let counterpart = |candidate: &&Run| candidate.series() == other && matches(spec, run, candidate, &[]);
+        let mut partners = runs
+            .iter()
+            .enumerate()
+            .filter(|(_, candidate)| candidate.row.repetition == run.row.repetition && counterpart(candidate));
+        let Some((index, partner)) = partners.next() else {
+            if runs.iter().any(|candidate| counterpart(&candidate)) {
+                continue; // `other` stopped before this round
+            }
+            return None;
+        };
         let (a, b) = (partner.num(metric), run.num(metric));
         if partners.next().is_some() || !taken.insert(index) || !a.is_finite() || !b.is_finite() {
             return None;
@@ -118,7 +125,7 @@ fn rounds(
         pairs.1.push(b);
         pairs.2.push(u64::from(partner.row.process_id) << 32 | u64::from(run.row.process_id));
     }
-    Some(pairs)
+    (pairs.0.len() >= 2).then_some(pairs)
 }
 
 /// The per-round ratios of two series timed in the same rounds, each with the pair of processes that timed it.
@@ -141,33 +148,18 @@ impl RoundRatios {
     }
 }
 
-/// The per-round ratios `metric(other) / metric(group)` where the two series ran in the same rounds (see
-/// [`rounds`]; at least two rounds, every sample of both sides paired), else `None`.
+/// The per-round ratios `metric(other) / metric(group)` over the rounds both series ran (see [`rounds`]; at least
+/// two), else `None`.
 pub fn round_ratios(spec: &ReportSpec, runs: &[Run], other: &str, group: &[&Run], metric: &str) -> Option<RoundRatios> {
-    let partners = samples(counterparts(spec, runs, other, group, &[column::seed]), metric).len();
-    paired_ratios(spec, runs, other, group, metric, partners)
-}
-
-/// [`round_ratios`] given how many samples of `other` match the group (the counterparts a caller already found).
-fn paired_ratios(
-    spec: &ReportSpec,
-    runs: &[Run],
-    other: &str,
-    group: &[&Run],
-    metric: &str,
-    partners: usize,
-) -> Option<RoundRatios> {
-    if partners != group.len() || partners < 2 {
-        return None;
-    }
     let (num, den, processes) = rounds(spec, runs, other, group, metric)?;
     Some(RoundRatios { ratios: num.iter().zip(&den).map(|(n, d)| n / d).collect(), processes })
 }
 
 /// `metric(other) / metric(group)` at one point, with its interval; `None` when there is no counterpart or no
-/// sample. Where the two series ran in the same rounds (every run has one counterpart of the same repetition,
-/// see [`rounds`]) it is the median of the per-round ratios with its interval ([`RoundRatios::estimate`]:
-/// processes resampled where the rounds ran in several); otherwise the ratio of the two medians, each side resampled on its own
+/// sample. Where the two series ran in the same rounds (every run of the group has one counterpart of the same
+/// repetition, or its setting's counterparts stopped earlier; see [`rounds`]) it is the median of the per-round
+/// ratios over the rounds both ran, with its interval ([`RoundRatios::estimate`]: processes resampled where the
+/// rounds ran in several); otherwise the ratio of the two medians, each side resampled on its own
 /// ([`stats::ratio_ci`]). `key` seeds the bootstrap.
 pub fn ratio_against(
     spec: &ReportSpec,
@@ -183,9 +175,7 @@ pub fn ratio_against(
     if numerator.is_empty() || denominator.is_empty() {
         return None;
     }
-    if numerator.len() == denominator.len()
-        && let Some(ratios) = paired_ratios(spec, runs, other, group, metric, numerator.len())
-    {
+    if let Some(ratios) = round_ratios(spec, runs, other, group, metric) {
         return Some(ratios.estimate(key));
     }
     Some(stats::ratio_ci(&numerator, &denominator, stats::seed_for(key)))
@@ -395,5 +385,47 @@ mod tests {
             assert!(p.estimate.lo <= p.estimate.value && p.estimate.value <= p.estimate.hi);
         }
         assert!(trade_off_curves(&runs, "no such series", column::trace_s, column::total_s).is_empty());
+    }
+
+    #[test]
+    fn rounds_pair_over_the_rounds_both_series_ran() {
+        let runs = golden();
+        let (a, b) = (
+            runs[0].series().to_string(),
+            runs.iter().map(Run::series).find(|s| *s != runs[0].series()).unwrap().to_string(),
+        );
+        // Each series fixes its structure (the `[[series]]` tables of the golden config).
+        let fixed: Vec<String> =
+            ["accel", "split", "leaf_size", "sah_bins", "traversal", "sah_traversal_cost", "sah_intersection_cost"]
+                .map(String::from)
+                .into();
+        let spec = ReportSpec {
+            series_fixed: [(a.clone(), fixed.clone()), (b.clone(), fixed)].into_iter().collect(),
+            ..ReportSpec::default()
+        };
+        let point = |runs: &[Run], series: &str| -> Vec<Run> {
+            runs.iter()
+                .filter(|r| r.series() == series && r.num(column::objects) == 10.0 && r.num(column::seed) == 1.0)
+                .cloned()
+                .collect()
+        };
+        let all = point(&runs, &a);
+        let group: Vec<&Run> = all.iter().collect();
+        let full = round_ratios(&spec, &runs, &b, &group, column::trace_s).expect("same rounds pair");
+        assert_eq!(full.ratios.len(), 3);
+        // `b` stopped a round early (adaptive repetitions): the two rounds both ran pair, the third is left out.
+        let fewer: Vec<Run> = runs.iter().filter(|r| !(r.series() == b && r.row.repetition == 2)).cloned().collect();
+        let shorter = round_ratios(&spec, &fewer, &b, &group, column::trace_s).expect("common rounds pair");
+        assert_eq!(shorter.ratios, full.ratios[..2]);
+        // The group stopped early: `b`'s extra round is left out.
+        let first_two: Vec<&Run> = group.iter().copied().filter(|r| r.row.repetition < 2).collect();
+        assert_eq!(round_ratios(&spec, &runs, &b, &first_two, column::trace_s).unwrap().ratios, full.ratios[..2]);
+        // A setting `b` never ran (its seed left out) does not pair, whatever the rounds.
+        let no_seed: Vec<Run> =
+            runs.iter().filter(|r| !(r.series() == b && r.num(column::seed) == 1.0)).cloned().collect();
+        assert!(round_ratios(&spec, &no_seed, &b, &group, column::trace_s).is_none());
+        // One round in common is not a pair of rounds.
+        let one: Vec<Run> = runs.iter().filter(|r| !(r.series() == b && r.row.repetition > 0)).cloned().collect();
+        assert!(round_ratios(&spec, &one, &b, &group, column::trace_s).is_none());
     }
 }
